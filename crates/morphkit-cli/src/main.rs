@@ -1,1 +1,52 @@
-fn main() {}
+//! `morphkit`: physical blendshapes and animation transfer from the command line.
+
+mod cmd;
+mod util;
+
+use clap::{Parser, Subcommand};
+
+/// Physically plausible blendshapes and example-driven animation transfer for triangle meshes.
+#[derive(Parser, Debug)]
+#[command(name = "morphkit", version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Describe meshes: counts, size, boundary, components, shared connectivity.
+    Info(cmd::info::InfoArgs),
+    /// Convert between OBJ, PLY, OFF, glTF/GLB and PC2, single meshes or frame sequences.
+    Convert(cmd::convert::ConvertArgs),
+    /// Run the main job on a built-in example: physical vs. linear blend of a bent bar.
+    Demo(cmd::demo::DemoArgs),
+    /// Blend shapes by rest-length interpolation of a mass–spring system (Ma et al. 2012).
+    Blend(cmd::blend::BlendArgs),
+    /// Compute a triangle correspondence between two meshes from marker pairs.
+    Correspond(cmd::correspond::CorrespondArgs),
+    /// Transfer an animation from a source mesh onto a different target mesh.
+    Transfer(cmd::transfer::TransferArgs),
+    /// Measure solver speed on generated and real meshes.
+    Bench(cmd::bench::BenchArgs),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Info(a) => cmd::info::run(a),
+        Command::Convert(a) => cmd::convert::run(a),
+        Command::Demo(a) => cmd::demo::run(a),
+        Command::Blend(a) => cmd::blend::run(a),
+        Command::Correspond(a) => cmd::correspond::run(a),
+        Command::Transfer(a) => cmd::transfer::run(a),
+        Command::Bench(a) => cmd::bench::run(a),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e}");
+        for cause in e.chain().skip(1) {
+            eprintln!("  caused by: {cause}");
+        }
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,9 @@
+//! One module per subcommand: its clap arguments and its `run`.
+
+pub mod bench;
+pub mod blend;
+pub mod convert;
+pub mod correspond;
+pub mod demo;
+pub mod info;
+pub mod transfer;
