@@ -18,5 +18,7 @@ pub mod geom;
 pub mod io;
 pub mod mesh;
 pub mod sparse;
+pub mod springs;
+pub mod transfer;
 
 pub use mesh::{ShapeSet, TriMesh};

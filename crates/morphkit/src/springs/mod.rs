@@ -1,0 +1,1 @@
+//! Physical blendshapes (Ma et al. 2012).
