@@ -8,6 +8,7 @@
 //!   triangle back to the polygon it came from, and [`TriMesh::polygons`] keeps the polygons so
 //!   that writers can emit the original quads.
 
+pub mod generate;
 mod shape_set;
 mod topology;
 mod validate;

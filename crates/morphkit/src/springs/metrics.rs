@@ -1,0 +1,111 @@
+//! Quality measures of a blend and the classic linear blend to compare with.
+//!
+//! All measures compare a blended shape with the *interpolated* intrinsic quantities: an edge's
+//! target length is $\bar r_e = \sum_s c_s \ell_e^s$, a triangle's target area
+//! $\bar A_t = \sum_s c_s A_t^s$, the target volume $\bar V = \sum_s c_s V^s$. A linear blend of
+//! two shapes related by a large rotation shortens edges and loses area and volume (the paper's
+//! Fig. 1c); a good physical blend keeps all three close to their targets.
+
+use super::{BlendError, Weights};
+use crate::mesh::{norm, sub, triangle_normal, Point, ShapeSet, Topology};
+
+/// Quality of one blended shape.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct BlendMetrics {
+    /// RMS over edges of $(\ell_e - \bar r_e) / \bar r_e$.
+    pub edge_length_rms: f64,
+    /// Max over edges of $|\ell_e - \bar r_e| / \bar r_e$.
+    pub edge_length_max: f64,
+    /// RMS over triangles of $A_t / \bar A_t - 1$.
+    pub area_rms: f64,
+    /// Enclosed (signed) volume, for closed meshes.
+    pub volume: Option<f64>,
+    /// $V / \bar V$, for closed meshes.
+    pub volume_ratio: Option<f64>,
+}
+
+/// The linear blendshape $\sum_s c_s x^s$ for the same weights.
+pub fn linear_blend(shapes: &ShapeSet, weights: &Weights) -> Result<Vec<Point>, BlendError> {
+    let c = weights.coefficients(shapes.len())?;
+    let mut out = vec![[0.0; 3]; shapes.num_vertices()];
+    for (s, &w) in c.iter().enumerate() {
+        if w != 0.0 {
+            for (o, p) in out.iter_mut().zip(shapes.positions(s)) {
+                for a in 0..3 {
+                    o[a] += w * p[a];
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn signed_volume(p: &[Point], tris: &[[u32; 3]]) -> f64 {
+    tris.iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| p[i as usize]);
+            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                + a[2] * (b[0] * c[1] - b[1] * c[0]))
+                / 6.0
+        })
+        .sum()
+}
+
+/// Measures `positions` against the targets interpolated with `weights`.
+pub fn blend_metrics(
+    shapes: &ShapeSet,
+    topology: &Topology,
+    weights: &Weights,
+    positions: &[Point],
+) -> Result<BlendMetrics, BlendError> {
+    let c = weights.coefficients(shapes.len())?;
+    let tiny = f64::MIN_POSITIVE * 1e10;
+    let (mut sum2, mut max, mut n) = (0.0, 0.0f64, 0usize);
+    for &[i, j] in topology.edges() {
+        let len = |p: &[Point]| norm(sub(p[i as usize], p[j as usize]));
+        let r: f64 = c
+            .iter()
+            .enumerate()
+            .map(|(s, w)| w * len(shapes.positions(s)))
+            .sum();
+        if r > tiny {
+            let d = (len(positions) - r) / r;
+            sum2 += d * d;
+            max = max.max(d.abs());
+            n += 1;
+        }
+    }
+    let edge_length_rms = (sum2 / n.max(1) as f64).sqrt();
+    let (mut a2, mut na) = (0.0, 0usize);
+    for &t in shapes.triangles() {
+        let area = |p: &[Point]| 0.5 * norm(triangle_normal(p, t));
+        let target: f64 = c
+            .iter()
+            .enumerate()
+            .map(|(s, w)| w * area(shapes.positions(s)))
+            .sum();
+        if target > tiny {
+            let d = area(positions) / target - 1.0;
+            a2 += d * d;
+            na += 1;
+        }
+    }
+    let (volume, volume_ratio) = if topology.is_closed() {
+        let v = signed_volume(positions, shapes.triangles());
+        let target: f64 = c
+            .iter()
+            .enumerate()
+            .map(|(s, w)| w * signed_volume(shapes.positions(s), shapes.triangles()))
+            .sum();
+        (Some(v), (target.abs() > tiny).then(|| v / target))
+    } else {
+        (None, None)
+    };
+    Ok(BlendMetrics {
+        edge_length_rms,
+        edge_length_max: max,
+        area_rms: (a2 / na.max(1) as f64).sqrt(),
+        volume,
+        volume_ratio,
+    })
+}

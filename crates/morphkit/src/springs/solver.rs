@@ -1,0 +1,517 @@
+//! The equilibrium solver: projected Newton with an Armijo line search (Ma et al. 2012,
+//! Eq. 2–4, Sec. 3.2; math notes §1).
+//!
+//! [`PhysicalBlend::new`] does all the set-up once: springs and their rest lengths in every
+//! shape, constraints, the sparsity pattern of the Hessian over the free degrees of freedom with
+//! a precomputed value slot for every spring block, and the symbolic Cholesky analysis.
+//! [`PhysicalBlend::solve`] then only assembles values, refactorizes numerically and solves.
+//! The pattern never changes (projection keeps every block, clamped or not), so the symbolic
+//! analysis is reused for every Newton step of every frame.
+//!
+//! Each solve warm-starts from the previous equilibrium. When the weights jump by more than
+//! [`BlendOptions::max_weight_step`], the solver walks there in equal sub-steps (a continuation),
+//! which keeps each Newton solve in the basin of the equilibrium that continues the path from
+//! the base shape: the physically meaningful one of the several a spring system can have
+//! (the paper's Sec. 5, "Limitations").
+
+use super::constraints::{Constraints, FixedVertices};
+use super::energy::{for_each_block, gradient};
+use super::{BlendError, RestLengths, SpringOptions, SpringSet, StiffnessRule, Weights};
+use crate::geom::kabsch;
+use crate::mesh::{validate, Point, ShapeSet, Topology};
+use crate::sparse::{Cholesky, Ordering, SolveError, SymmetricPattern};
+use std::time::Instant;
+
+/// Options of the physical blend. Every field has a meaningful default.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlendOptions {
+    /// Which springs and how stiff.
+    pub springs: SpringOptions,
+    /// Boundary conditions. Default [`FixedVertices::Auto`].
+    pub fixed: FixedVertices,
+    /// Convergence: stop when $\max_k |\partial E / \partial x_k| \le$ `gradient_tolerance`
+    /// $\cdot k_0 \cdot s$ over the free coordinates, with $s = 1$ for the
+    /// $k = k_0/\bar r$ rule (the gradient is then a force in units of $k_0$ times strain, so the
+    /// tolerance does not depend on the mesh's scale) and $s$ = the mean base rest length for
+    /// uniform stiffness. Default `1e-9`.
+    pub gradient_tolerance: f64,
+    /// Newton iterations allowed per (sub-)step before giving up with `converged = false`.
+    /// Default 50.
+    pub max_newton_iterations: usize,
+    /// Largest change of any shape coefficient per continuation sub-step. Default `0.25`.
+    pub max_weight_step: f64,
+    /// Interpolated rest lengths are clamped to at least this fraction of the base rest length
+    /// (reported per frame). Default `0.05`.
+    pub min_rest_fraction: f64,
+    /// Armijo sufficient-decrease constant. Default `1e-4`.
+    pub armijo: f64,
+}
+
+impl Default for BlendOptions {
+    fn default() -> Self {
+        Self {
+            springs: SpringOptions::default(),
+            fixed: FixedVertices::Auto,
+            gradient_tolerance: 1e-9,
+            max_newton_iterations: 50,
+            max_weight_step: 0.25,
+            min_rest_fraction: 0.05,
+            armijo: 1e-4,
+        }
+    }
+}
+
+/// Solver statistics of one [`PhysicalBlend::solve`].
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FrameStats {
+    /// Newton iterations, summed over sub-steps.
+    pub newton_iterations: usize,
+    /// Line-search step halvings, summed.
+    pub line_search_backtracks: usize,
+    /// Numeric factorizations (including regularization retries).
+    pub factorizations: usize,
+    /// Continuation sub-steps taken.
+    pub substeps: usize,
+    /// Final $\max_k |\partial E/\partial x_k|$ over free coordinates.
+    pub gradient_norm: f64,
+    /// The tolerance it was compared with (absolute).
+    pub gradient_tolerance: f64,
+    /// Final energy.
+    pub energy: f64,
+    /// Whether the gradient reached the tolerance.
+    pub converged: bool,
+    /// Springs whose interpolated rest length was clamped.
+    pub clamped_springs: usize,
+    /// Wall time in seconds.
+    pub seconds: f64,
+}
+
+/// A blended shape and how it was found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlendResult {
+    /// Vertex positions, `#V`.
+    pub positions: Vec<Point>,
+    /// Solver statistics.
+    pub stats: FrameStats,
+}
+
+/// Physical blendshape solver: build once, then [`solve`](Self::solve) for as many weight
+/// vectors as needed (a slider, an animation).
+pub struct PhysicalBlend {
+    shapes: ShapeSet,
+    springs: SpringSet,
+    constraints: Constraints,
+    options: BlendOptions,
+    /// Free-DOF index of each of the `3 #V` coordinates, `u32::MAX` when fixed.
+    dof_index: Vec<u32>,
+    /// Value slots of each spring's 21 lower-triangle Hessian entries (6 + 6 + 9).
+    slots: Vec<[u32; 21]>,
+    diag_slots: Vec<u32>,
+    chol: Cholesky,
+    values: Vec<f64>,
+    /// Current equilibrium, in solver coordinates (before gauge alignment), `3 #V`.
+    x: Vec<f64>,
+    /// Shape coefficients of the current equilibrium.
+    coefficients: Vec<f64>,
+    tol_abs: f64,
+    regularization: f64,
+}
+
+impl std::fmt::Debug for PhysicalBlend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PhysicalBlend")
+            .field("vertices", &self.shapes.num_vertices())
+            .field("springs", &self.springs.len())
+            .field("free_dofs", &self.chol.pattern().n())
+            .finish()
+    }
+}
+
+impl PhysicalBlend {
+    /// Builds springs, constraints, the Hessian pattern and its symbolic factorization.
+    pub fn new(shapes: &ShapeSet, options: &BlendOptions) -> Result<Self, BlendError> {
+        let o = options;
+        if !(o.gradient_tolerance.is_finite() && o.gradient_tolerance > 0.0) {
+            return Err(BlendError::InvalidOption(format!(
+                "gradient_tolerance must be positive, got {}",
+                o.gradient_tolerance
+            )));
+        }
+        if !(o.springs.k0.is_finite() && o.springs.k0 > 0.0)
+            || !(o.springs.bending_scale.is_finite() && o.springs.bending_scale >= 0.0)
+        {
+            return Err(BlendError::InvalidOption(
+                "k0 must be positive and bending_scale non-negative".into(),
+            ));
+        }
+        if !(o.max_weight_step > 0.0)
+            || !(0.0..1.0).contains(&o.min_rest_fraction)
+            || o.min_rest_fraction <= 0.0
+        {
+            return Err(BlendError::InvalidOption(
+                "max_weight_step must be positive and min_rest_fraction in (0, 1)".into(),
+            ));
+        }
+        for s in 0..shapes.len() {
+            validate(&shapes.mesh(s))?;
+        }
+        let n = shapes.num_vertices();
+        let topology = Topology::new(n, shapes.triangles());
+        let springs = SpringSet::new(shapes, &topology, &o.springs);
+        if springs.is_empty() {
+            return Err(BlendError::NoSprings);
+        }
+        let constraints = Constraints::new(shapes, &topology, &o.fixed)?;
+
+        let mut dof_index = vec![u32::MAX; 3 * n];
+        let mut nfree = 0u32;
+        for (k, fixed) in constraints.fixed_dof.iter().enumerate() {
+            if !fixed {
+                dof_index[k] = nfree;
+                nfree += 1;
+            }
+        }
+        let nfree = nfree as usize;
+        // Lower-triangle entries of every spring block, in a fixed order.
+        let mut entries = Vec::with_capacity(21 * springs.len());
+        let mut owner = Vec::with_capacity(21 * springs.len());
+        for (q, s) in springs.springs().iter().enumerate() {
+            for (e, (r, c)) in block_entries(s.i as usize, s.j as usize)
+                .into_iter()
+                .enumerate()
+            {
+                let (ri, ci) = (dof_index[r], dof_index[c]);
+                if ri != u32::MAX && ci != u32::MAX {
+                    entries.push((ri as usize, ci as usize));
+                    owner.push((q, e));
+                }
+            }
+        }
+        let (pattern, entry_slots) = SymmetricPattern::new(nfree, &entries)?;
+        let mut slots = vec![[u32::MAX; 21]; springs.len()];
+        for ((q, e), s) in owner.into_iter().zip(entry_slots) {
+            slots[q][e] = s as u32;
+        }
+        let diag_slots = (0..nfree).map(|k| pattern.diag_slot(k) as u32).collect();
+        let values = vec![0.0; pattern.nnz()];
+        let chol = Cholesky::analyze(pattern, Ordering::Amd)?;
+
+        let scale = match o.springs.stiffness {
+            StiffnessRule::InverseRestLength => 1.0,
+            StiffnessRule::Uniform => {
+                let r = springs.rest_lengths(0);
+                r.iter().sum::<f64>() / r.len() as f64
+            }
+        };
+        let x = shapes.positions(0).iter().flatten().copied().collect();
+        let mut coefficients = vec![0.0; shapes.len()];
+        coefficients[0] = 1.0;
+        Ok(Self {
+            shapes: shapes.clone(),
+            springs,
+            constraints,
+            options: o.clone(),
+            dof_index,
+            slots,
+            diag_slots,
+            chol,
+            values,
+            x,
+            coefficients,
+            tol_abs: o.gradient_tolerance * o.springs.k0 * scale,
+            regularization: 0.0,
+        })
+    }
+
+    /// The springs.
+    pub fn springs(&self) -> &SpringSet {
+        &self.springs
+    }
+    /// The resolved constraints.
+    pub fn constraints(&self) -> &Constraints {
+        &self.constraints
+    }
+    /// Number of free unknowns of the Newton system.
+    pub fn num_free_dofs(&self) -> usize {
+        self.chol.pattern().n()
+    }
+    /// Number of stored entries of the Cholesky factor (memory ≈ 8 bytes each).
+    pub fn factor_nnz(&self) -> usize {
+        self.chol.factor_nnz()
+    }
+    /// The shape set.
+    pub fn shapes(&self) -> &ShapeSet {
+        &self.shapes
+    }
+
+    /// Forgets the warm start: the next solve starts again from the base shape.
+    pub fn reset(&mut self) {
+        self.x = self.shapes.positions(0).iter().flatten().copied().collect();
+        self.coefficients.iter_mut().for_each(|c| *c = 0.0);
+        self.coefficients[0] = 1.0;
+    }
+
+    /// The equilibrium for `weights`, warm-started from the previous solve.
+    ///
+    /// A solve that does not reach the tolerance within the iteration budget still returns the
+    /// best state found, with `stats.converged == false`; it never returns NaNs.
+    pub fn solve(&mut self, weights: &Weights) -> Result<BlendResult, BlendError> {
+        let start = Instant::now();
+        let target = weights.coefficients(self.shapes.len())?;
+        let jump = target
+            .iter()
+            .zip(&self.coefficients)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        let substeps = ((jump / self.options.max_weight_step).ceil() as usize).max(1);
+        let from = self.coefficients.clone();
+        let mut stats = FrameStats {
+            substeps,
+            gradient_tolerance: self.tol_abs,
+            ..Default::default()
+        };
+        for step in 1..=substeps {
+            let t = step as f64 / substeps as f64;
+            let c: Vec<f64> = from
+                .iter()
+                .zip(&target)
+                .map(|(a, b)| a + t * (b - a))
+                .collect();
+            let rest = RestLengths::interpolate(&self.springs, &c, self.options.min_rest_fraction);
+            self.place_fixed(&c);
+            self.newton(&rest.values, &mut stats)?;
+            stats.clamped_springs = rest.clamped.len();
+            self.coefficients = c;
+        }
+        self.coefficients = target.clone();
+        let positions = self.output(&target);
+        stats.seconds = start.elapsed().as_secs_f64();
+        Ok(BlendResult { positions, stats })
+    }
+
+    /// Sets fixed vertices to the linear interpolation of their positions.
+    fn place_fixed(&mut self, c: &[f64]) {
+        for &v in &self.constraints.fixed {
+            let v = v as usize;
+            for a in 0..3 {
+                self.x[3 * v + a] = c
+                    .iter()
+                    .enumerate()
+                    .map(|(s, w)| w * self.shapes.positions(s)[v][a])
+                    .sum();
+            }
+        }
+    }
+
+    fn max_free_gradient(&self, g: &[f64]) -> f64 {
+        g.iter()
+            .zip(&self.dof_index)
+            .filter(|(_, i)| **i != u32::MAX)
+            .map(|(v, _)| v.abs())
+            .fold(0.0, f64::max)
+    }
+
+    fn newton(&mut self, rest: &[f64], stats: &mut FrameStats) -> Result<(), BlendError> {
+        let n3 = self.x.len();
+        let mut g = vec![0.0; n3];
+        let mut e = gradient(&self.springs, rest, &self.x, &mut g);
+        let mut gmax = self.max_free_gradient(&g);
+        let mut x_trial = vec![0.0; n3];
+        let mut g_trial = vec![0.0; n3];
+        stats.converged = gmax <= self.tol_abs;
+        let mut iter = 0;
+        while !stats.converged && iter < self.options.max_newton_iterations {
+            iter += 1;
+            stats.newton_iterations += 1;
+            let mut step = self.newton_direction(rest, &g, stats)?;
+            // Armijo backtracking on the energy.
+            let slope: f64 = self
+                .dof_index
+                .iter()
+                .enumerate()
+                .filter(|(_, i)| **i != u32::MAX)
+                .map(|(k, &i)| g[k] * step[i as usize])
+                .sum();
+            if slope >= 0.0 {
+                // Not a descent direction (round-off at convergence): fall back to steepest descent.
+                for (k, &i) in self.dof_index.iter().enumerate() {
+                    if i != u32::MAX {
+                        step[i as usize] = -g[k];
+                    }
+                }
+            }
+            let slope: f64 = self
+                .dof_index
+                .iter()
+                .enumerate()
+                .filter(|(_, i)| **i != u32::MAX)
+                .map(|(k, &i)| g[k] * step[i as usize])
+                .sum();
+            let mut t = 1.0;
+            let mut accepted = false;
+            for _ in 0..60 {
+                x_trial.copy_from_slice(&self.x);
+                for (k, &i) in self.dof_index.iter().enumerate() {
+                    if i != u32::MAX {
+                        x_trial[k] += t * step[i as usize];
+                    }
+                }
+                let e_trial = gradient(&self.springs, rest, &x_trial, &mut g_trial);
+                if !e_trial.is_finite() {
+                    stats.line_search_backtracks += 1;
+                    t *= 0.5;
+                    continue;
+                }
+                let g_trial_max = self.max_free_gradient(&g_trial);
+                // Near the minimum, energy differences drown in round-off; then accept a step
+                // that reduces the gradient instead.
+                let roundoff = 1e-13 * e.abs().max(f64::MIN_POSITIVE);
+                if e_trial <= e + self.options.armijo * t * slope
+                    || (e_trial - e <= roundoff && g_trial_max < gmax)
+                {
+                    accepted = true;
+                    e = e_trial;
+                    gmax = g_trial_max;
+                    std::mem::swap(&mut self.x, &mut x_trial);
+                    std::mem::swap(&mut g, &mut g_trial);
+                    break;
+                }
+                stats.line_search_backtracks += 1;
+                t *= 0.5;
+            }
+            if !e.is_finite() {
+                return Err(BlendError::Diverged { iteration: iter });
+            }
+            stats.converged = gmax <= self.tol_abs;
+            if !accepted {
+                break; // stalled: no decrease possible in floating point
+            }
+        }
+        stats.gradient_norm = gmax;
+        stats.energy = e;
+        Ok(())
+    }
+
+    /// Solves $H \Delta = -\nabla E$ on the free coordinates with the projected Hessian,
+    /// adding a small multiple of the identity when needed: flat regions have no stiffness
+    /// normal to their plane at rest, and round-off can make such a pivot non-positive.
+    fn newton_direction(
+        &mut self,
+        rest: &[f64],
+        g: &[f64],
+        stats: &mut FrameStats,
+    ) -> Result<Vec<f64>, BlendError> {
+        self.values.iter_mut().for_each(|v| *v = 0.0);
+        let slots = &self.slots;
+        let values = &mut self.values;
+        for_each_block(&self.springs, rest, &self.x, true, |q, _, _, b| {
+            let s = &slots[q];
+            let mut e = 0;
+            for _vertex in 0..2 {
+                for a in 0..3 {
+                    for c in 0..=a {
+                        if s[e] != u32::MAX {
+                            values[s[e] as usize] += b[a][c];
+                        }
+                        e += 1;
+                    }
+                }
+            }
+            for a in 0..3 {
+                for c in 0..3 {
+                    if s[e] != u32::MAX {
+                        values[s[e] as usize] -= b[a][c];
+                    }
+                    e += 1;
+                }
+            }
+        });
+        let mean_diag = self
+            .diag_slots
+            .iter()
+            .map(|&d| self.values[d as usize])
+            .sum::<f64>()
+            / self.diag_slots.len().max(1) as f64;
+        let mut mu = self.regularization.max(1e-10 * mean_diag);
+        let mut rhs = vec![0.0; self.diag_slots.len()];
+        for (k, &i) in self.dof_index.iter().enumerate() {
+            if i != u32::MAX {
+                rhs[i as usize] = -g[k];
+            }
+        }
+        loop {
+            let mut v = self.values.clone();
+            for &d in &self.diag_slots {
+                v[d as usize] += mu;
+            }
+            stats.factorizations += 1;
+            match self.chol.factorize(&v) {
+                Ok(()) => break,
+                Err(SolveError::NotPositiveDefinite { .. }) if mu < 1e-2 * mean_diag => {
+                    mu = (mu * 100.0).max(1e-8 * mean_diag);
+                    self.regularization = mu;
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+        self.chol.solve_in_place(&mut rhs, 1)?;
+        Ok(rhs)
+    }
+
+    /// Current equilibrium as positions, gauge components aligned to the linear blend.
+    fn output(&self, c: &[f64]) -> Vec<Point> {
+        let mut p: Vec<Point> = self.x.chunks_exact(3).map(|v| [v[0], v[1], v[2]]).collect();
+        for comp in &self.constraints.gauge_components {
+            let from: Vec<Point> = comp.iter().map(|&v| p[v as usize]).collect();
+            let to: Vec<Point> = comp
+                .iter()
+                .map(|&v| {
+                    let mut q = [0.0; 3];
+                    for (s, w) in c.iter().enumerate() {
+                        for a in 0..3 {
+                            q[a] += w * self.shapes.positions(s)[v as usize][a];
+                        }
+                    }
+                    q
+                })
+                .collect();
+            let fit = kabsch(&from, &to, &[]);
+            for &v in comp {
+                p[v as usize] = fit.apply(p[v as usize]);
+            }
+        }
+        p
+    }
+}
+
+/// The 21 lower-triangle entries `(row, col)` of a spring block over coordinates, in the order
+/// the assembly loop visits them: `ii` (6), `jj` (6), then the 9 coupling entries
+/// `(3j + c, 3i + a)`, row-major in `(a, c)`.
+fn block_entries(i: usize, j: usize) -> [(usize, usize); 21] {
+    let mut out = [(0, 0); 21];
+    let mut e = 0;
+    for v in [i, j] {
+        for a in 0..3 {
+            for c in 0..=a {
+                out[e] = (3 * v + a, 3 * v + c);
+                e += 1;
+            }
+        }
+    }
+    for a in 0..3 {
+        for c in 0..3 {
+            out[e] = (3 * j + c, 3 * i + a);
+            e += 1;
+        }
+    }
+    out
+}
+
+/// One-shot physical blend: builds a [`PhysicalBlend`] and solves once.
+pub fn blend(
+    shapes: &ShapeSet,
+    weights: &Weights,
+    options: &BlendOptions,
+) -> Result<BlendResult, BlendError> {
+    PhysicalBlend::new(shapes, options)?.solve(weights)
+}

@@ -1,0 +1,165 @@
+//! Spring structure (Ma et al. 2012, Sec. 3.1) and per-target rest lengths (Sec. 3.2).
+
+use crate::mesh::{norm, sub, Point, ShapeSet, Topology};
+
+/// What a spring models.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+pub enum SpringKind {
+    /// Along a mesh edge: in-surface elasticity.
+    Structure,
+    /// Between vertices at graph distance exactly 2: bending and curvature.
+    Bending,
+}
+
+/// How spring stiffness depends on rest length.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum StiffnessRule {
+    /// $k = k_0 / \bar r$ (Sec. 3.5): every spring exerts a similar force for the same relative
+    /// strain, whatever its length. The default, and what the paper uses.
+    #[default]
+    InverseRestLength,
+    /// $k = k_0$ for every spring.
+    Uniform,
+}
+
+/// Which springs to build and how stiff they are.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpringOptions {
+    /// Structure springs on every edge. Default `true`.
+    pub structure: bool,
+    /// Bending springs between vertices at graph distance 2. Default `true`.
+    pub bending: bool,
+    /// Base stiffness $k_0$. Default `1.0` (only ratios matter for the equilibrium).
+    pub k0: f64,
+    /// Multiplier of $k_0$ for bending springs. Default `1.0` (the paper uses one $k_0$).
+    pub bending_scale: f64,
+    /// Stiffness rule. Default [`StiffnessRule::InverseRestLength`].
+    pub stiffness: StiffnessRule,
+}
+
+impl Default for SpringOptions {
+    fn default() -> Self {
+        Self {
+            structure: true,
+            bending: true,
+            k0: 1.0,
+            bending_scale: 1.0,
+            stiffness: StiffnessRule::InverseRestLength,
+        }
+    }
+}
+
+/// One spring between vertices `i < j`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Spring {
+    /// First vertex (the smaller index).
+    pub i: u32,
+    /// Second vertex.
+    pub j: u32,
+    /// What it models.
+    pub kind: SpringKind,
+}
+
+/// The springs of a shape set and their rest lengths in every shape.
+#[derive(Clone, Debug)]
+pub struct SpringSet {
+    springs: Vec<Spring>,
+    /// `rest[s][q]`: length of spring `q` in shape `s`.
+    rest: Vec<Vec<f64>>,
+    /// Stiffness multiplier per spring (`k0`, times `bending_scale` for bending springs).
+    scale: Vec<f64>,
+    options: SpringOptions,
+}
+
+impl SpringSet {
+    /// Builds the springs from the shared connectivity and measures them in every shape.
+    pub fn new(shapes: &ShapeSet, topology: &Topology, options: &SpringOptions) -> Self {
+        let mut springs = Vec::new();
+        if options.structure {
+            springs.extend(topology.edges().iter().map(|&[i, j]| Spring {
+                i,
+                j,
+                kind: SpringKind::Structure,
+            }));
+        }
+        if options.bending {
+            for v in 0..topology.num_vertices() {
+                for &w in topology.two_ring(v) {
+                    if (v as u32) < w {
+                        springs.push(Spring {
+                            i: v as u32,
+                            j: w,
+                            kind: SpringKind::Bending,
+                        });
+                    }
+                }
+            }
+        }
+        let rest = shapes
+            .all_positions()
+            .iter()
+            .map(|p| lengths(&springs, p))
+            .collect();
+        let scale = springs
+            .iter()
+            .map(|s| match s.kind {
+                SpringKind::Structure => options.k0,
+                SpringKind::Bending => options.k0 * options.bending_scale,
+            })
+            .collect();
+        Self {
+            springs,
+            rest,
+            scale,
+            options: options.clone(),
+        }
+    }
+
+    /// The springs.
+    pub fn springs(&self) -> &[Spring] {
+        &self.springs
+    }
+    /// Number of springs.
+    pub fn len(&self) -> usize {
+        self.springs.len()
+    }
+    /// True when there are no springs.
+    pub fn is_empty(&self) -> bool {
+        self.springs.is_empty()
+    }
+    /// Number of springs of one kind.
+    pub fn count(&self, kind: SpringKind) -> usize {
+        self.springs.iter().filter(|s| s.kind == kind).count()
+    }
+    /// Rest lengths of every spring in shape `s`.
+    pub fn rest_lengths(&self, s: usize) -> &[f64] {
+        &self.rest[s]
+    }
+    /// Number of shapes measured.
+    pub fn num_shapes(&self) -> usize {
+        self.rest.len()
+    }
+    /// The options the set was built with.
+    pub fn options(&self) -> &SpringOptions {
+        &self.options
+    }
+    /// Stiffness of spring `q` at interpolated rest length `r`.
+    #[inline]
+    pub fn stiffness(&self, q: usize, r: f64) -> f64 {
+        match self.options.stiffness {
+            StiffnessRule::InverseRestLength => self.scale[q] / r,
+            StiffnessRule::Uniform => self.scale[q],
+        }
+    }
+    /// Current lengths of every spring for positions `p`.
+    pub fn lengths(&self, p: &[Point]) -> Vec<f64> {
+        lengths(&self.springs, p)
+    }
+}
+
+fn lengths(springs: &[Spring], p: &[Point]) -> Vec<f64> {
+    springs
+        .iter()
+        .map(|s| norm(sub(p[s.i as usize], p[s.j as usize])))
+        .collect()
+}
