@@ -1,8 +1,97 @@
-//! Mesh file formats.
+//! Mesh and animation files: OBJ (also `.obj.gz`), PLY, OFF, glTF/GLB and PC2.
+//!
+//! | format | read | write | notes |
+//! |---|---|---|---|
+//! | OBJ | [`obj`] | [`obj`] | `v`/`f` only, polygons kept, full `f64` precision; `.obj.gz` both ways |
+//! | PLY | [`ply`] | [`ply`] | ascii and binary; written binary little endian, optionally coloured |
+//! | OFF | [`off`] | [`off`] | |
+//! | glTF / GLB | [`gltf`] | [`gltf`] | first mesh; morph targets and morph-weight animations |
+//! | PC2 | [`pc2`] | [`pc2`] | positions only; connectivity from a reference mesh |
+//!
+//! Every read is validated once, on entry, with [`crate::mesh::validate`]: what it calls an
+//! error becomes [`IoError::InvalidMesh`] naming the file, its warnings are returned by
+//! [`read_mesh_with_report`]. Every write is atomic ([`write_atomic`]) and sequence writers never
+//! overwrite an input ([`check_not_input`]). Every error names the file.
 
-/// Placeholder until the I/O module lands: writes `bytes` to `path` atomically.
-pub fn write_atomic(path: &std::path::Path, bytes: &[u8]) -> std::io::Result<()> {
-    let tmp = path.with_extension("morphkit-tmp");
-    std::fs::write(&tmp, bytes)?;
-    std::fs::rename(tmp, path)
+mod atomic;
+mod colors;
+mod error;
+mod format;
+pub mod gltf;
+pub mod obj;
+pub mod off;
+pub mod pc2;
+pub mod ply;
+mod sequence;
+mod source;
+
+pub use atomic::{check_not_input, write_atomic};
+pub use colors::{diverging, scalar_colors, viridis, Colors, NAN_GREY};
+pub use error::IoError;
+pub use format::Format;
+pub use gltf::{read_gltf_morphs, write_gltf_morphs, GltfMorphs};
+pub use ply::{write_ply_colored, PlyEncoding};
+pub use sequence::{
+    frames_to_gltf, gltf_to_frames, read_animation, read_shape_set, read_shape_set_with,
+    write_frames, write_frames_with, FramesOptions,
+};
+
+use crate::mesh::{validate, TriMesh, ValidationReport};
+use std::path::Path;
+
+const MESH_FORMATS: &str = ".obj, .obj.gz, .ply, .off, .gltf or .glb";
+
+/// Reads one mesh, choosing the format by extension (`.obj`, `.obj.gz`, `.ply`, `.off`,
+/// `.gltf`, `.glb`; for glTF the first mesh's base positions), and validates it. Validation
+/// warnings are dropped; see [`read_mesh_with_report`].
+pub fn read_mesh(path: &Path) -> Result<TriMesh, IoError> {
+    read_mesh_with_report(path).map(|(m, _)| m)
+}
+
+/// Like [`read_mesh`], also returning the validation warnings (degenerate or duplicate
+/// triangles, coincident or isolated vertices).
+pub fn read_mesh_with_report(path: &Path) -> Result<(TriMesh, ValidationReport), IoError> {
+    if path.is_dir() {
+        return Err(IoError::IsDirectory {
+            path: path.to_path_buf(),
+        });
+    }
+    let mesh = match format::mesh_format(path, MESH_FORMATS)? {
+        Format::Obj { .. } => obj::parse_obj(path, &source::read_file(path)?)?,
+        Format::Ply => ply::parse_ply(path, &source::read_file(path)?)?,
+        Format::Off => off::parse_off(path, &source::read_file(path)?)?,
+        Format::Gltf | Format::Glb => read_gltf_morphs(path)?.base,
+        Format::Pc2 => {
+            return Err(IoError::NeedsReference {
+                path: path.to_path_buf(),
+            })
+        }
+    };
+    let report = validate(&mesh).map_err(|source| IoError::InvalidMesh {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok((mesh, report))
+}
+
+/// Writes one mesh atomically, choosing the format by extension: `.obj` / `.obj.gz` and `.off`
+/// (original polygons when the mesh has them), `.ply` (binary little endian), `.glb` / `.gltf`
+/// (triangles, no morph targets).
+pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<(), IoError> {
+    match format::mesh_format(path, MESH_FORMATS)? {
+        Format::Obj { gzip } => obj::write_obj(path, mesh, gzip),
+        Format::Ply => ply::write_ply(path, mesh, PlyEncoding::default()),
+        Format::Off => off::write_off(path, mesh),
+        Format::Gltf | Format::Glb => write_gltf_morphs(
+            path,
+            &GltfMorphs {
+                base: mesh.clone(),
+                ..GltfMorphs::default()
+            },
+        ),
+        Format::Pc2 => Err(IoError::UnknownFormat {
+            path: path.to_path_buf(),
+            expected: MESH_FORMATS,
+        }),
+    }
 }

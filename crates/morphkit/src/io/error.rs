@@ -1,0 +1,164 @@
+//! The error type of the I/O layer: every variant names the file it is about.
+
+use crate::mesh::{MeshError, ShapeSetError};
+use std::path::{Path, PathBuf};
+
+/// Why a mesh or animation file could not be read or written.
+///
+/// Every message starts with the file's path. Text parse errors name the 1-based line, binary
+/// parse errors the byte offset or the element index.
+#[derive(Debug, thiserror::Error)]
+pub enum IoError {
+    /// The operating system refused an operation (open, read, create, rename, …).
+    #[error("{}: cannot {action}: {source}", path.display())]
+    Os {
+        /// The file or directory.
+        path: PathBuf,
+        /// What was being done, e.g. "read the file".
+        action: &'static str,
+        /// The operating-system error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file has no content at all.
+    #[error("{}: the file is empty", path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A directory was given where a file is expected.
+    #[error("{}: is a directory, expected a file", path.display())]
+    IsDirectory {
+        /// The directory.
+        path: PathBuf,
+    },
+    /// The extension names no supported format for this operation.
+    #[error("{}: unsupported format; expected {expected}", path.display())]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+        /// The formats accepted here, in words.
+        expected: &'static str,
+    },
+    /// A text file is malformed at a line.
+    #[error("{}:{line}: {message}", path.display())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A binary file is malformed or truncated at a byte offset.
+    #[error("{}: at byte {offset}: {message}", path.display())]
+    Binary {
+        /// The file.
+        path: PathBuf,
+        /// 0-based byte offset where the problem was found.
+        offset: u64,
+        /// What is wrong.
+        message: String,
+    },
+    /// The file parses but its content is inconsistent (a glTF element, a count that disagrees).
+    #[error("{}: {message}", path.display())]
+    Content {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the element.
+        message: String,
+    },
+    /// The glTF loader rejected the file.
+    #[error("{}: invalid glTF: {source}", path.display())]
+    Gltf {
+        /// The file.
+        path: PathBuf,
+        /// The loader's error.
+        #[source]
+        source: ::gltf::Error,
+    },
+    /// The mesh read from the file is unusable (see [`crate::mesh::validate`]).
+    #[error("{}: {source}", path.display())]
+    InvalidMesh {
+        /// The file.
+        path: PathBuf,
+        /// What validation found.
+        #[source]
+        source: MeshError,
+    },
+    /// Meshes that should share one connectivity do not. The shape name in the message is the
+    /// offending file's path.
+    #[error("{source}")]
+    ShapeSet {
+        /// The offending file.
+        path: PathBuf,
+        /// The mismatch, naming the file and the first differing triangle.
+        #[source]
+        source: ShapeSetError,
+    },
+    /// An output path is one of the input files (or a directory holding one).
+    #[error("{}: refusing to overwrite the input {}", path.display(), input.display())]
+    WouldOverwriteInput {
+        /// The output path.
+        path: PathBuf,
+        /// The input it would overwrite.
+        input: PathBuf,
+    },
+    /// A PC2 point cache needs a reference mesh for its connectivity.
+    #[error("{}: a PC2 point cache has no faces; give a reference mesh for its connectivity", path.display())]
+    NeedsReference {
+        /// The PC2 file.
+        path: PathBuf,
+    },
+}
+
+impl IoError {
+    /// The file the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            Self::Os { path, .. }
+            | Self::Empty { path }
+            | Self::IsDirectory { path }
+            | Self::UnknownFormat { path, .. }
+            | Self::Parse { path, .. }
+            | Self::Binary { path, .. }
+            | Self::Content { path, .. }
+            | Self::Gltf { path, .. }
+            | Self::InvalidMesh { path, .. }
+            | Self::ShapeSet { path, .. }
+            | Self::WouldOverwriteInput { path, .. }
+            | Self::NeedsReference { path } => path,
+        }
+    }
+
+    pub(crate) fn os(path: &Path, action: &'static str, source: std::io::Error) -> Self {
+        Self::Os {
+            path: path.to_path_buf(),
+            action,
+            source,
+        }
+    }
+
+    pub(crate) fn parse(path: &Path, line: usize, message: impl Into<String>) -> Self {
+        Self::Parse {
+            path: path.to_path_buf(),
+            line,
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn binary(path: &Path, offset: u64, message: impl Into<String>) -> Self {
+        Self::Binary {
+            path: path.to_path_buf(),
+            offset,
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn content(path: &Path, message: impl Into<String>) -> Self {
+        Self::Content {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+}

@@ -1,0 +1,269 @@
+//! Shape sets and animations made of several meshes: reading frame sequences and rigs, writing
+//! numbered OBJ frames, glTF morph animations and PC2 caches.
+
+use super::format::Format;
+use super::gltf::{read_gltf_morphs, write_gltf_morphs, GltfMorphs};
+use super::pc2::{parse_pc2, write_pc2, PointCache};
+use super::{check_not_input, obj, read_mesh, source::read_file, IoError};
+use crate::mesh::{ShapeSet, ShapeSetError};
+use std::path::{Path, PathBuf};
+
+/// Options of [`write_frames`].
+#[derive(Clone, Debug)]
+pub struct FramesOptions {
+    /// Frames per second of a glTF animation (frame `i` is keyed at `i / fps` seconds); must be
+    /// positive. Default 24. Not stored in OBJ frames or PC2 caches.
+    pub fps: f64,
+    /// Input files; the output must not be one of them (nor a directory holding one).
+    pub inputs: Vec<PathBuf>,
+}
+
+impl Default for FramesOptions {
+    fn default() -> Self {
+        Self {
+            fps: 24.0,
+            inputs: Vec::new(),
+        }
+    }
+}
+
+fn file_name(p: &Path) -> String {
+    p.file_name().map_or_else(
+        || p.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
+/// Reads meshes that share one connectivity; shape names are the file names, shape 0 is the
+/// first file. A mismatch is an [`IoError::ShapeSet`] naming the offending file's path and the
+/// first differing triangle (or the differing counts).
+pub fn read_shape_set(paths: &[PathBuf]) -> Result<ShapeSet, IoError> {
+    read_shape_set_with(paths, |_, _| {})
+}
+
+/// Like [`read_shape_set`], calling `on_file(i, path)` after file `i` is read (for progress).
+pub fn read_shape_set_with(
+    paths: &[PathBuf],
+    mut on_file: impl FnMut(usize, &Path),
+) -> Result<ShapeSet, IoError> {
+    let Some(first) = paths.first() else {
+        return Err(IoError::ShapeSet {
+            path: PathBuf::new(),
+            source: ShapeSetError::Empty,
+        });
+    };
+    let base = read_mesh(first)?;
+    on_file(0, first);
+    let mut set = ShapeSet::from_meshes(vec![(file_name(first), base)]).map_err(|source| {
+        IoError::ShapeSet {
+            path: first.clone(),
+            source,
+        }
+    })?;
+    for (i, p) in paths.iter().enumerate().skip(1) {
+        let m = read_mesh(p)?;
+        let wrap = |source| IoError::ShapeSet {
+            path: p.clone(),
+            source,
+        };
+        set.check_connectivity(&p.display().to_string(), &m)
+            .map_err(wrap)?;
+        set.push(file_name(p), m.positions).map_err(wrap)?;
+        on_file(i, p);
+    }
+    Ok(set)
+}
+
+/// The `.obj` and `.obj.gz` files of a directory, sorted by name.
+fn obj_files(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
+    let entries = std::fs::read_dir(dir).map_err(|e| IoError::os(dir, "list the directory", e))?;
+    let mut files = Vec::new();
+    for e in entries {
+        let p = e
+            .map_err(|e| IoError::os(dir, "list the directory", e))?
+            .path();
+        if p.is_file() && matches!(Format::from_path(&p), Some(Format::Obj { .. })) {
+            files.push(p);
+        }
+    }
+    files.sort();
+    if files.is_empty() {
+        return Err(IoError::content(
+            dir,
+            "the directory holds no .obj or .obj.gz files",
+        ));
+    }
+    Ok(files)
+}
+
+/// The frames of a glTF rig: one per weight key (base + Σ wᵢ Δᵢ; named after the target when
+/// the key is one-hot, else `frame_NNNN`), or, without an animation, the base (named `base`)
+/// followed by each target.
+pub fn gltf_to_frames(path: &Path, m: &GltfMorphs) -> Result<ShapeSet, IoError> {
+    let shapes: Vec<(String, Vec<crate::mesh::Point>)> = if m.weight_keys.is_empty() {
+        std::iter::once(("base".to_string(), m.base.positions.clone()))
+            .chain(
+                m.target_names
+                    .iter()
+                    .cloned()
+                    .zip(m.targets.iter().cloned()),
+            )
+            .collect()
+    } else {
+        m.weight_keys
+            .iter()
+            .enumerate()
+            .map(|(k, (_, w))| {
+                let ones: Vec<usize> = (0..w.len()).filter(|&i| w[i] != 0.0).collect();
+                let name = match ones.as_slice() {
+                    [i] if w[*i] == 1.0 => m.target_names[*i].clone(),
+                    _ => format!("frame_{k:04}"),
+                };
+                (name, m.evaluate(w))
+            })
+            .collect()
+    };
+    ShapeSet::new(m.base.clone(), shapes).map_err(|source| IoError::ShapeSet {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The glTF rig that plays `frames`: base = shape 0's mesh, one morph target per frame named
+/// after it, and one-hot weight keys at `i / fps` seconds.
+pub fn frames_to_gltf(frames: &ShapeSet, fps: f64) -> GltfMorphs {
+    let n = frames.len();
+    GltfMorphs {
+        base: frames.base().clone(),
+        target_names: frames.names().to_vec(),
+        targets: frames.all_positions().to_vec(),
+        weight_keys: (0..n)
+            .map(|i| {
+                let mut w = vec![0.0; n];
+                w[i] = 1.0;
+                (i as f64 / fps, w)
+            })
+            .collect(),
+    }
+}
+
+/// Reads an animation or a rig as a [`ShapeSet`]:
+/// - a directory: its `*.obj` / `*.obj.gz` files sorted by name (see [`read_shape_set`]);
+/// - `.glb` / `.gltf`: see [`gltf_to_frames`];
+/// - `.pc2`: one shape per sample (`frame_NNNN`) over `reference`'s connectivity, which is
+///   required ([`IoError::NeedsReference`]) and must have as many vertices as the cache points;
+/// - a single OBJ/PLY/OFF mesh: a set of one shape.
+pub fn read_animation(path: &Path, reference: Option<&Path>) -> Result<ShapeSet, IoError> {
+    if path.is_dir() {
+        return read_shape_set(&obj_files(path)?);
+    }
+    match Format::from_path(path) {
+        Some(Format::Gltf | Format::Glb) => gltf_to_frames(path, &read_gltf_morphs(path)?),
+        Some(Format::Pc2) => {
+            let reference = reference.ok_or_else(|| IoError::NeedsReference {
+                path: path.to_path_buf(),
+            })?;
+            let mesh = read_mesh(reference)?;
+            let cache = parse_pc2(path, &read_file(path)?)?;
+            let np = cache.samples.first().map_or(0, Vec::len);
+            if cache.samples.is_empty() {
+                return Err(IoError::content(path, "the point cache has no samples"));
+            }
+            if np != mesh.num_vertices() {
+                return Err(IoError::content(
+                    path,
+                    format!(
+                        "the cache has {np} points, the reference {} has {} vertices",
+                        reference.display(),
+                        mesh.num_vertices()
+                    ),
+                ));
+            }
+            let shapes = cache
+                .samples
+                .into_iter()
+                .enumerate()
+                .map(|(i, s)| (format!("frame_{i:04}"), s))
+                .collect();
+            ShapeSet::new(mesh, shapes).map_err(|source| IoError::ShapeSet {
+                path: path.to_path_buf(),
+                source,
+            })
+        }
+        _ => read_shape_set(&[path.to_path_buf()]),
+    }
+}
+
+/// True when `out` names a frame directory: an existing directory, or a path without extension.
+fn is_frame_dir(out: &Path) -> bool {
+    out.is_dir() || (!out.exists() && out.extension().is_none())
+}
+
+/// Writes an animation; see [`write_frames_with`].
+pub fn write_frames(out: &Path, frames: &ShapeSet, opts: &FramesOptions) -> Result<(), IoError> {
+    write_frames_with(out, frames, opts, |_| {})
+}
+
+/// Writes `frames` to `out`, calling `on_frame(i)` after each OBJ frame file:
+/// - a directory (existing, or a path without extension, created): `frame_0000.obj`, … one
+///   per shape; a failure removes the frames written by this call (and the directory if this
+///   call created it);
+/// - `.glb` / `.gltf`: [`frames_to_gltf`] at `opts.fps`;
+/// - `.pc2`: one sample per shape, start frame 0, one frame per sample.
+///
+/// Fails before writing anything when `out` is an input ([`check_not_input`]) or `fps` is not
+/// positive.
+pub fn write_frames_with(
+    out: &Path,
+    frames: &ShapeSet,
+    opts: &FramesOptions,
+    mut on_frame: impl FnMut(usize),
+) -> Result<(), IoError> {
+    check_not_input(out, &opts.inputs)?;
+    if !(opts.fps.is_finite() && opts.fps > 0.0) {
+        return Err(IoError::content(
+            out,
+            format!("frame rate {} is not positive", opts.fps),
+        ));
+    }
+    if is_frame_dir(out) {
+        let created = !out.exists();
+        if created {
+            std::fs::create_dir_all(out)
+                .map_err(|e| IoError::os(out, "create the directory", e))?;
+        }
+        let mut written = Vec::with_capacity(frames.len());
+        for i in 0..frames.len() {
+            let p = out.join(format!("frame_{i:04}.obj"));
+            if let Err(e) = obj::write_obj(&p, &frames.mesh(i), false) {
+                for w in &written {
+                    let _ = std::fs::remove_file(w);
+                }
+                if created {
+                    let _ = std::fs::remove_dir(out);
+                }
+                return Err(e);
+            }
+            written.push(p);
+            on_frame(i);
+        }
+        return Ok(());
+    }
+    match Format::from_path(out) {
+        Some(Format::Glb | Format::Gltf) => {
+            write_gltf_morphs(out, &frames_to_gltf(frames, opts.fps))
+        }
+        Some(Format::Pc2) => write_pc2(
+            out,
+            &PointCache {
+                start_frame: 0.0,
+                sample_rate: 1.0,
+                samples: frames.all_positions().to_vec(),
+            },
+        ),
+        _ => Err(IoError::UnknownFormat {
+            path: out.to_path_buf(),
+            expected: "a directory, .glb, .gltf or .pc2 for an animation",
+        }),
+    }
+}
