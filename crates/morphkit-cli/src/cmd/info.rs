@@ -1,10 +1,120 @@
-//! `morphkit info`.
+//! `morphkit info`: counts, size, boundary, components and shared connectivity of meshes.
+
+use crate::util::progress;
+use morphkit::mesh::Topology;
+use morphkit::TriMesh;
+use serde_json::{json, Value};
+use std::path::PathBuf;
+
+const EXAMPLES: &str = "\
+Examples:
+  morphkit info horse-reference.obj.gz
+  morphkit info cat-run/*.obj.gz            # also says whether all share one connectivity
+  morphkit info --json face.glb neutral.obj > info.json";
 
 /// Arguments of `morphkit info`.
 #[derive(clap::Args, Debug)]
-pub struct InfoArgs {}
+#[command(after_help = EXAMPLES)]
+pub struct InfoArgs {
+    /// Mesh files (.obj, .obj.gz, .ply, .off, .gltf, .glb).
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+    /// Print machine-readable JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// What `info` reports about one file.
+fn describe(path: &std::path::Path, mesh: &TriMesh, warnings: &[String]) -> Value {
+    let topo = Topology::new(mesh.num_vertices(), &mesh.triangles);
+    let (lo, hi) = mesh.bounding_box();
+    json!({
+        "file": path.display().to_string(),
+        "vertices": mesh.num_vertices(),
+        "triangles": mesh.num_triangles(),
+        "polygons": mesh.polygons.as_ref().map(|p| p.len()),
+        "bbox_min": lo,
+        "bbox_max": hi,
+        "bbox_diagonal": mesh.bbox_diagonal(),
+        "edges": topo.edges().len(),
+        "boundary_edges": topo.boundary_edges().len(),
+        "non_manifold_edges": topo.non_manifold_edges().len(),
+        "components": topo.num_components(),
+        "closed": topo.is_closed(),
+        "consistently_oriented": topo.is_consistently_oriented(),
+        "warnings": warnings,
+    })
+}
+
+fn yes_no(v: &Value) -> &'static str {
+    if v.as_bool() == Some(true) {
+        "yes"
+    } else {
+        "no"
+    }
+}
 
 /// Runs `morphkit info`.
-pub fn run(_args: &InfoArgs) -> anyhow::Result<()> {
-    anyhow::bail!("'morphkit info' is not available in this build yet")
+pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
+    let pb = progress(args.files.len() as u64, "reading");
+    let mut reports = Vec::with_capacity(args.files.len());
+    let mut first: Option<TriMesh> = None;
+    let mut shared = true;
+    for path in &args.files {
+        let (mesh, report) = morphkit::io::read_mesh_with_report(path)?;
+        let warnings: Vec<String> = report.warnings.iter().map(|w| w.to_string()).collect();
+        reports.push(describe(path, &mesh, &warnings));
+        match &first {
+            None => first = Some(mesh),
+            Some(f) => {
+                shared &= f.num_vertices() == mesh.num_vertices() && f.triangles == mesh.triangles
+            }
+        }
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    if args.json {
+        let out = json!({ "files": reports, "shared_connectivity": shared });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
+    for r in &reports {
+        println!("{}", r["file"].as_str().unwrap_or(""));
+        println!("  vertices               {}", r["vertices"]);
+        println!("  triangles              {}", r["triangles"]);
+        if let Some(p) = r["polygons"].as_u64() {
+            println!("  polygons               {p}");
+        }
+        println!(
+            "  bounding-box diagonal  {:.6}",
+            r["bbox_diagonal"].as_f64().unwrap_or(f64::NAN)
+        );
+        println!("  boundary edges         {}", r["boundary_edges"]);
+        println!("  non-manifold edges     {}", r["non_manifold_edges"]);
+        println!("  components             {}", r["components"]);
+        println!("  closed                 {}", yes_no(&r["closed"]));
+        println!(
+            "  consistently oriented  {}",
+            yes_no(&r["consistently_oriented"])
+        );
+        match r["warnings"].as_array() {
+            Some(w) if !w.is_empty() => {
+                for w in w {
+                    println!("  warning: {}", w.as_str().unwrap_or(""));
+                }
+            }
+            _ => println!("  warnings               none"),
+        }
+    }
+    if reports.len() > 1 {
+        println!(
+            "shared connectivity: {}",
+            if shared {
+                "yes, all files have the same vertex count and triangles"
+            } else {
+                "no"
+            }
+        );
+    }
+    Ok(())
 }
