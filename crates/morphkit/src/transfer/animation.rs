@@ -1,0 +1,281 @@
+//! Frame-by-frame animation transfer: source gradients → correspondence → prefactored solve →
+//! translation convention (Wang & Lee 2008, Sec. 3.2.3; Sumner & Popović 2004).
+//!
+//! Each target triangle's wanted gradient $M_j$ combines the gradients of its matched source
+//! triangles ([`GradientCombine`], the mean by default). The solve fixes one constraint vertex
+//! per component, which alone would keep the target "running in place" — the limitation the
+//! paper notes ("the constraint vertex is fixed in the same position through the entire
+//! sequence"). [`TranslationMode::FollowMarkers`] (the default) goes beyond it: the result is
+//! translated so that the centroid $\bar t$ of the target's anchor vertices (the markers; every
+//! vertex for an identity correspondence) follows the source's anchor centroid $\bar s$:
+//! $$\bar t(f) = \bar t(\text{ref}) + \frac{d_t}{d_s}\,\big(\bar s(f) - \bar s(\text{ref})\big),$$
+//! $d_t, d_s$ the reference bounding-box diagonals. [`TranslationMode::FixedVertex`] keeps the
+//! paper's convention. With several target components the translation is one rigid shift of
+//! the whole result, so components keep the placement the constraint vertices give them.
+
+use super::correspondence::{Correspondence, GradientCombine};
+use super::error::{Side, TransferError};
+use super::gradients::GradientOperator;
+use super::solve::{SolverOptions, TransferSolver};
+use crate::mesh::{validate, Point, ShapeSet, TriMesh};
+use nalgebra::Matrix3;
+
+/// Where each transferred frame is placed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TranslationMode {
+    /// The target's anchor centroid follows the source's, scaled by the size ratio. Default.
+    #[default]
+    FollowMarkers,
+    /// The paper's convention: the constraint vertices stay at their reference positions.
+    FixedVertex,
+}
+
+/// Options of [`AnimationTransfer`].
+#[derive(Clone, Debug, Default)]
+pub struct TransferOptions {
+    /// Options of the prefactored solve (weights, constraint vertices).
+    pub solver: SolverOptions,
+    /// How the gradients of several matched source triangles combine. Default: mean.
+    pub combine: GradientCombine,
+    /// Translation convention. Default: follow the markers.
+    pub translation: TranslationMode,
+}
+
+/// A transfer set up once for a source reference, a target and their correspondence.
+#[derive(Debug)]
+pub struct AnimationTransfer {
+    gradients: GradientOperator,
+    correspondence: Correspondence,
+    solver: TransferSolver,
+    source_triangles: Vec<[u32; 3]>,
+    anchors: Vec<[u32; 2]>,
+    source_anchor_ref: Point,
+    target_anchor_ref: Point,
+    scale: f64,
+    combine: GradientCombine,
+    translation: TranslationMode,
+}
+
+fn centroid(p: &[Point], idx: impl Iterator<Item = u32>) -> Point {
+    let mut c = [0.0; 3];
+    let mut n = 0usize;
+    for i in idx {
+        for k in 0..3 {
+            c[k] += p[i as usize][k];
+        }
+        n += 1;
+    }
+    c.map(|x| x / n.max(1) as f64)
+}
+
+impl AnimationTransfer {
+    /// Checks the meshes against the correspondence, precomputes the source reference's
+    /// inverse frames and factors the target's transfer matrix.
+    pub fn new(
+        source_reference: &TriMesh,
+        target: &TriMesh,
+        correspondence: &Correspondence,
+        opts: &TransferOptions,
+    ) -> Result<Self, TransferError> {
+        validate(source_reference).map_err(|source| TransferError::Mesh {
+            side: Side::Source,
+            source,
+        })?;
+        correspondence.check(source_reference, target)?;
+        let solver = TransferSolver::new(target, &opts.solver)?;
+        let anchors = correspondence.anchor_pairs();
+        let source_anchor_ref = centroid(&source_reference.positions, anchors.iter().map(|a| a[0]));
+        let target_anchor_ref = centroid(&target.positions, anchors.iter().map(|a| a[1]));
+        let ds = source_reference.bbox_diagonal();
+        let scale = if ds > 0.0 {
+            target.bbox_diagonal() / ds
+        } else {
+            1.0
+        };
+        Ok(Self {
+            gradients: GradientOperator::new(source_reference),
+            correspondence: correspondence.clone(),
+            solver,
+            source_triangles: source_reference.triangles.clone(),
+            anchors,
+            source_anchor_ref,
+            target_anchor_ref,
+            scale,
+            combine: opts.combine,
+            translation: opts.translation,
+        })
+    }
+
+    /// The prefactored solver.
+    pub fn solver(&self) -> &TransferSolver {
+        &self.solver
+    }
+
+    /// The correspondence in use.
+    pub fn correspondence(&self) -> &Correspondence {
+        &self.correspondence
+    }
+
+    /// Size ratio $d_t / d_s$ used by the translation convention.
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
+    /// Gradients of every source triangle of `frame` relative to the source reference.
+    pub fn source_gradients(&self, frame: &[Point]) -> Result<Vec<Matrix3<f64>>, TransferError> {
+        self.gradients.gradients(frame)
+    }
+
+    /// Wanted gradient of every target triangle, from per-source-triangle gradients.
+    pub fn target_gradients(&self, source_gradients: &[Matrix3<f64>]) -> Vec<Matrix3<f64>> {
+        self.correspondence
+            .map_gradients(source_gradients, self.combine)
+    }
+
+    /// Solves for target positions from per-target-triangle gradients (from
+    /// [`AnimationTransfer::target_gradients`], or blended by a synthesis step) and places the
+    /// result by the translation convention; `source_frame` supplies the source anchor
+    /// centroid (`None`: the target's anchors stay where they are in the reference).
+    pub fn solve_gradients(
+        &self,
+        target_gradients: &[Matrix3<f64>],
+        source_frame: Option<&[Point]>,
+    ) -> Result<Vec<Point>, TransferError> {
+        let mut x = self.solver.solve(target_gradients)?;
+        if self.translation == TranslationMode::FollowMarkers {
+            let now = centroid(&x, self.anchors.iter().map(|a| a[1]));
+            let mut want = self.target_anchor_ref;
+            if let Some(f) = source_frame {
+                let s = centroid(f, self.anchors.iter().map(|a| a[0]));
+                for k in 0..3 {
+                    want[k] += self.scale * (s[k] - self.source_anchor_ref[k]);
+                }
+            }
+            let shift = [0, 1, 2].map(|k| want[k] - now[k]);
+            for p in &mut x {
+                for k in 0..3 {
+                    p[k] += shift[k];
+                }
+            }
+        }
+        Ok(x)
+    }
+
+    /// Transfers one source frame (positions over the source reference's connectivity).
+    pub fn transfer_frame(&self, source_frame: &[Point]) -> Result<Vec<Point>, TransferError> {
+        let g = self.source_gradients(source_frame)?;
+        let m = self.target_gradients(&g);
+        self.solve_gradients(&m, Some(source_frame))
+    }
+
+    /// Checks that `frames` share the source reference's connectivity.
+    pub fn check_frames(&self, frames: &ShapeSet) -> Result<(), TransferError> {
+        check_frames(&self.source_triangles, self.gradients_vertices(), frames)
+    }
+
+    fn gradients_vertices(&self) -> usize {
+        self.correspondence.source_vertices
+    }
+}
+
+fn check_frames(
+    reference: &[[u32; 3]],
+    num_vertices: usize,
+    frames: &ShapeSet,
+) -> Result<(), TransferError> {
+    if frames.num_vertices() != num_vertices {
+        return Err(TransferError::FrameVertexCount {
+            frame: 0,
+            expected: num_vertices,
+            found: frames.num_vertices(),
+        });
+    }
+    let ft = frames.triangles();
+    let n = reference.len().max(ft.len());
+    for t in 0..n {
+        let e = reference.get(t).copied().unwrap_or([u32::MAX; 3]);
+        let f = ft.get(t).copied().unwrap_or([u32::MAX; 3]);
+        if e != f {
+            return Err(TransferError::FrameConnectivity {
+                frame: 0,
+                triangle: t,
+                expected: e,
+                found: f,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// One-shot transfer of every frame of `frames` (which must share `source_reference`'s
+/// connectivity) onto `target`.
+pub fn transfer_animation(
+    source_reference: &TriMesh,
+    frames: &ShapeSet,
+    target: &TriMesh,
+    correspondence: &Correspondence,
+    opts: &TransferOptions,
+) -> Result<Vec<Vec<Point>>, TransferError> {
+    let tr = AnimationTransfer::new(source_reference, target, correspondence, opts)?;
+    tr.check_frames(frames)?;
+    frames
+        .all_positions()
+        .iter()
+        .map(|p| tr.transfer_frame(p))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transfer::testmesh::sphere;
+    use nalgebra::{Rotation3, Vector3};
+
+    #[test]
+    fn identity_transfer_reproduces_frames_and_follows_translation() {
+        let m = sphere(12, 8, 2.0);
+        let r = Rotation3::from_euler_angles(0.7, -0.4, 1.9).into_inner();
+        let t = Vector3::new(3.0, -1.0, 0.25);
+        let frame: Vec<Point> = m
+            .positions
+            .iter()
+            .map(|p| [p[0] * 1.2, p[1], p[2] + 0.1 * p[0] * p[1]])
+            .map(|p| (r * Vector3::from(p) + t).into())
+            .collect();
+        let c = Correspondence::identity(&m);
+        let tr = AnimationTransfer::new(&m, &m, &c, &TransferOptions::default()).unwrap();
+        let x = tr.transfer_frame(&frame).unwrap();
+        for (a, b) in x.iter().zip(&frame) {
+            assert!(crate::mesh::norm(crate::mesh::sub(*a, *b)) < 1e-9);
+        }
+        // The paper's convention keeps the constraint vertex in place instead.
+        let fixed = TransferOptions {
+            translation: TranslationMode::FixedVertex,
+            ..Default::default()
+        };
+        let tr = AnimationTransfer::new(&m, &m, &c, &fixed).unwrap();
+        let x = tr.transfer_frame(&frame).unwrap();
+        let v = tr.solver().constraint_vertices()[0] as usize;
+        assert_eq!(x[v], m.positions[v]);
+    }
+
+    #[test]
+    fn frames_with_other_connectivity_are_rejected() {
+        let m = sphere(8, 6, 1.0);
+        let mut other = m.clone();
+        other.triangles.swap(3, 4);
+        let frames = ShapeSet::from_meshes(vec![("f".into(), other)]).unwrap();
+        let e = transfer_animation(
+            &m,
+            &frames,
+            &m,
+            &Correspondence::identity(&m),
+            &TransferOptions::default(),
+        )
+        .unwrap_err();
+        assert!(matches!(
+            e,
+            TransferError::FrameConnectivity { triangle: 3, .. }
+        ));
+    }
+}
