@@ -159,7 +159,7 @@ fn edit_glb_json(path: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
     edit(&mut doc);
     let bin = &b[20 + jlen..];
     let mut json = serde_json::to_vec(&doc).unwrap();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let mut out = b"glTF".to_vec();
@@ -231,7 +231,7 @@ fn directory_where_a_file_is_expected() {
     assert!(matches!(e, IoError::IsDirectory { .. }));
     let e = io::write_mesh(&sub, &quad()).unwrap_err();
     assert!(matches!(e, IoError::IsDirectory { .. }), "{e}");
-    let e = io::read_shape_set(&[sub.clone()]).unwrap_err();
+    let e = io::read_shape_set(std::slice::from_ref(&sub)).unwrap_err();
     assert!(e.to_string().contains("is a directory"));
     let _ = std::fs::remove_dir_all(&d);
 }

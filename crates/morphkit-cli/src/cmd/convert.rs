@@ -25,7 +25,7 @@ Outputs are written atomically and never overwrite an input.";
 #[command(after_help = EXAMPLES)]
 pub struct ConvertArgs {
     /// Inputs (files, quoted glob patterns, or one directory of OBJ frames), then the output.
-    #[arg(required = true, num_args = 2.., value_name = "IN... OUT")]
+    #[arg(required = true, value_name = "IN... OUT")]
     pub paths: Vec<String>,
     /// Frames per second of a written glTF animation.
     #[arg(long, default_value_t = 24.0)]
@@ -106,10 +106,10 @@ fn write_frames(out: &Path, frames: &ShapeSet, opts: &FramesOptions) -> anyhow::
 
 /// Runs `morphkit convert`.
 pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
-    let (out, ins) = args
-        .paths
-        .split_last()
-        .context("give at least one input and an output")?;
+    let (out, ins) = match args.paths.split_last() {
+        Some((out, ins)) if !ins.is_empty() => (out, ins),
+        _ => bail!("give at least one input and an output (morphkit convert IN... OUT)"),
+    };
     let out = PathBuf::from(out);
     let mut inputs = expand(ins)?;
     let single_dir = inputs.len() == 1 && inputs[0].is_dir();

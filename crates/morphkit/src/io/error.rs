@@ -6,19 +6,20 @@ use std::path::{Path, PathBuf};
 /// Why a mesh or animation file could not be read or written.
 ///
 /// Every message starts with the file's path. Text parse errors name the 1-based line, binary
-/// parse errors the byte offset or the element index.
+/// parse errors the byte offset or the element index. Messages are complete in themselves: the
+/// underlying cause is part of the message and kept in a `cause` field, not repeated as an
+/// [`std::error::Error::source`], so that an error chain prints it once.
 #[derive(Debug, thiserror::Error)]
 pub enum IoError {
     /// The operating system refused an operation (open, read, create, rename, …).
-    #[error("{}: cannot {action}: {source}", path.display())]
+    #[error("{}: cannot {action}: {cause}", path.display())]
     Os {
         /// The file or directory.
         path: PathBuf,
         /// What was being done, e.g. "read the file".
         action: &'static str,
         /// The operating-system error.
-        #[source]
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// The file has no content at all.
     #[error("{}: the file is empty", path.display())]
@@ -69,32 +70,29 @@ pub enum IoError {
         message: String,
     },
     /// The glTF loader rejected the file.
-    #[error("{}: invalid glTF: {source}", path.display())]
+    #[error("{}: invalid glTF: {cause}", path.display())]
     Gltf {
         /// The file.
         path: PathBuf,
         /// The loader's error.
-        #[source]
-        source: ::gltf::Error,
+        cause: ::gltf::Error,
     },
     /// The mesh read from the file is unusable (see [`crate::mesh::validate`]).
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {cause}", path.display())]
     InvalidMesh {
         /// The file.
         path: PathBuf,
         /// What validation found.
-        #[source]
-        source: MeshError,
+        cause: MeshError,
     },
     /// Meshes that should share one connectivity do not. The shape name in the message is the
     /// offending file's path.
-    #[error("{source}")]
+    #[error("{cause}")]
     ShapeSet {
         /// The offending file.
         path: PathBuf,
         /// The mismatch, naming the file and the first differing triangle.
-        #[source]
-        source: ShapeSetError,
+        cause: ShapeSetError,
     },
     /// An output path is one of the input files (or a directory holding one).
     #[error("{}: refusing to overwrite the input {}", path.display(), input.display())]
@@ -131,11 +129,11 @@ impl IoError {
         }
     }
 
-    pub(crate) fn os(path: &Path, action: &'static str, source: std::io::Error) -> Self {
+    pub(crate) fn os(path: &Path, action: &'static str, cause: std::io::Error) -> Self {
         Self::Os {
             path: path.to_path_buf(),
             action,
-            source,
+            cause,
         }
     }
 

@@ -69,7 +69,7 @@ pub fn read_mesh_with_report(path: &Path) -> Result<(TriMesh, ValidationReport),
     };
     let report = validate(&mesh).map_err(|source| IoError::InvalidMesh {
         path: path.to_path_buf(),
-        source,
+        cause: source,
     })?;
     Ok((mesh, report))
 }

@@ -178,6 +178,9 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, IoError> {
     })
 }
 
+/// Numbered lines of an ascii body.
+type AsciiLines<'a> = std::iter::Enumerate<std::slice::Split<'a, u8, fn(&u8) -> bool>>;
+
 /// Where the values come from: a binary cursor or ascii lines.
 enum Body<'a> {
     Binary {
@@ -186,7 +189,7 @@ enum Body<'a> {
         big: bool,
     },
     Ascii {
-        lines: std::iter::Enumerate<std::slice::Split<'a, u8, fn(&u8) -> bool>>,
+        lines: AsciiLines<'a>,
         first_line: usize,
     },
 }

@@ -49,7 +49,7 @@ pub fn read_shape_set_with(
     let Some(first) = paths.first() else {
         return Err(IoError::ShapeSet {
             path: PathBuf::new(),
-            source: ShapeSetError::Empty,
+            cause: ShapeSetError::Empty,
         });
     };
     let base = read_mesh(first)?;
@@ -57,14 +57,14 @@ pub fn read_shape_set_with(
     let mut set = ShapeSet::from_meshes(vec![(file_name(first), base)]).map_err(|source| {
         IoError::ShapeSet {
             path: first.clone(),
-            source,
+            cause: source,
         }
     })?;
     for (i, p) in paths.iter().enumerate().skip(1) {
         let m = read_mesh(p)?;
         let wrap = |source| IoError::ShapeSet {
             path: p.clone(),
-            source,
+            cause: source,
         };
         set.check_connectivity(&p.display().to_string(), &m)
             .map_err(wrap)?;
@@ -125,7 +125,7 @@ pub fn gltf_to_frames(path: &Path, m: &GltfMorphs) -> Result<ShapeSet, IoError> 
     };
     ShapeSet::new(m.base.clone(), shapes).map_err(|source| IoError::ShapeSet {
         path: path.to_path_buf(),
-        source,
+        cause: source,
     })
 }
 
@@ -187,7 +187,7 @@ pub fn read_animation(path: &Path, reference: Option<&Path>) -> Result<ShapeSet,
                 .collect();
             ShapeSet::new(mesh, shapes).map_err(|source| IoError::ShapeSet {
                 path: path.to_path_buf(),
-                source,
+                cause: source,
             })
         }
         _ => read_shape_set(&[path.to_path_buf()]),

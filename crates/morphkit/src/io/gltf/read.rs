@@ -86,7 +86,7 @@ pub fn read_gltf_morphs(path: &Path) -> Result<GltfMorphs, IoError> {
     }
     let gerr = |source| IoError::Gltf {
         path: path.to_path_buf(),
-        source,
+        cause: source,
     };
     let gltf = ::gltf::Gltf::from_slice(&bytes).map_err(gerr)?;
     let base_dir = match path.parent() {
@@ -154,7 +154,7 @@ pub fn read_gltf_morphs(path: &Path) -> Result<GltfMorphs, IoError> {
                 )));
             }
         }
-        if idx.len() % 3 != 0 {
+        if !idx.len().is_multiple_of(3) {
             return Err(at(format!("{} indices is not a multiple of 3", idx.len())));
         }
         if let Some((k, &i)) = idx.iter().enumerate().find(|(_, &i)| i as usize >= n) {

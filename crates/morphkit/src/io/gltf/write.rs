@@ -22,7 +22,7 @@ struct Builder {
 impl Builder {
     /// Appends `bytes` as a new 4-byte-aligned buffer view; returns its index.
     fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
@@ -225,7 +225,7 @@ fn build(path: &Path, m: &GltfMorphs) -> Result<(Value, Vec<u8>), IoError> {
             "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}],
         }]);
     }
-    while b.bin.len() % 4 != 0 {
+    while !b.bin.len().is_multiple_of(4) {
         b.bin.push(0);
     }
     doc["bufferViews"] = Value::Array(b.views);
@@ -248,7 +248,7 @@ pub fn write_gltf_morphs(path: &Path, m: &GltfMorphs) -> Result<(), IoError> {
     let bytes = if glb {
         let mut json =
             serde_json::to_vec(&doc).map_err(|e| IoError::content(path, e.to_string()))?;
-        while json.len() % 4 != 0 {
+        while !json.len().is_multiple_of(4) {
             json.push(b' ');
         }
         let total = 12 + 8 + json.len() + 8 + bin.len();

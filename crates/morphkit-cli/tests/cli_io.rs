@@ -1,0 +1,200 @@
+//! `morphkit info` and `morphkit convert`, run as the built binary.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn tmp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("morphkit-cli-io-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn morphkit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_morphkit"))
+        .args(args)
+        .output()
+        .expect("run morphkit")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = morphkit(args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "morphkit {args:?} failed: {err}");
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn fails(args: &[&str]) -> String {
+    let out = morphkit(args);
+    assert!(!out.status.success(), "morphkit {args:?} should fail");
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(err.starts_with("error: "), "{err}");
+    err
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Writes a strip of `n` quads bent by `bend`, as OBJ.
+fn write_strip(path: &Path, n: usize, bend: f64) {
+    let mut t = String::new();
+    for i in 0..=n {
+        let x = i as f64 / n as f64;
+        t += &format!("v {x} 0 {}\nv {x} 1 {}\n", bend * x * x, bend * x * x);
+    }
+    for i in 0..n {
+        let a = 2 * i + 1;
+        t += &format!("f {} {} {} {}\n", a, a + 2, a + 3, a + 1);
+    }
+    std::fs::write(path, t).unwrap();
+}
+
+fn frames(d: &Path, n: usize) -> Vec<PathBuf> {
+    std::fs::create_dir_all(d.join("seq")).unwrap();
+    (0..n)
+        .map(|k| {
+            let p = d.join(format!("seq/f{k:02}.obj"));
+            write_strip(&p, 4, k as f64 * 0.1);
+            p
+        })
+        .collect()
+}
+
+#[test]
+fn help_shows_examples() {
+    for cmd in ["info", "convert"] {
+        let h = ok(&[cmd, "--help"]);
+        assert!(
+            h.contains("Examples:") && h.contains(&format!("morphkit {cmd} ")),
+            "{h}"
+        );
+    }
+}
+
+#[test]
+fn info_text_and_json() {
+    let d = tmp_dir("info");
+    let f = frames(&d, 2);
+    let text = ok(&["info", s(&f[0]), s(&f[1])]);
+    assert!(text.contains("vertices               10"), "{text}");
+    assert!(text.contains("triangles              8"), "{text}");
+    assert!(text.contains("polygons               4"), "{text}");
+    assert!(text.contains("boundary edges         10"), "{text}");
+    assert!(text.contains("shared connectivity: yes"), "{text}");
+    let json: serde_json::Value = serde_json::from_str(&ok(&["info", "--json", s(&f[0])])).unwrap();
+    let r = &json["files"][0];
+    assert_eq!(r["vertices"], 10);
+    assert_eq!(r["components"], 1);
+    assert_eq!(r["closed"], false);
+    assert_eq!(r["consistently_oriented"], true);
+    assert!((r["bbox_diagonal"].as_f64().unwrap() - 2f64.sqrt()).abs() < 1e-12);
+    // Different connectivity is reported, not an error.
+    let other = d.join("other.obj");
+    write_strip(&other, 5, 0.0);
+    let json: serde_json::Value =
+        serde_json::from_str(&ok(&["info", "--json", s(&f[0]), s(&other)])).unwrap();
+    assert_eq!(json["shared_connectivity"], false);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn convert_single_meshes_between_formats() {
+    let d = tmp_dir("single");
+    let f = frames(&d, 1);
+    let mut prev = f[0].clone();
+    for ext in ["ply", "off", "glb", "gltf", "obj.gz", "obj"] {
+        let out = d.join(format!("m.{ext}"));
+        ok(&["convert", s(&prev), s(&out)]);
+        prev = out;
+    }
+    let json: serde_json::Value = serde_json::from_str(&ok(&["info", "--json", s(&prev)])).unwrap();
+    assert_eq!(json["files"][0]["vertices"], 10);
+    assert_eq!(json["files"][0]["triangles"], 8);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn convert_sequences_to_animations_and_back() {
+    let d = tmp_dir("seq");
+    let f = frames(&d, 5);
+    // A glob pattern, a directory and a list of files.
+    let pattern = format!("{}/seq/f*.obj", d.display());
+    ok(&["convert", &pattern, "--fps", "10", s(&d.join("a.glb"))]);
+    ok(&["convert", s(&d.join("seq")), s(&d.join("b.gltf"))]);
+    let list: Vec<&str> = f.iter().map(|p| s(p)).collect();
+    ok(&[&["convert"], list.as_slice(), &[s(&d.join("c.pc2"))]].concat());
+    // Back to frames.
+    ok(&["convert", s(&d.join("a.glb")), s(&d.join("from-glb"))]);
+    ok(&[
+        "convert",
+        s(&d.join("c.pc2")),
+        "--reference",
+        s(&f[0]),
+        s(&d.join("from-pc2")),
+    ]);
+    for dir in ["from-glb", "from-pc2"] {
+        let names: Vec<String> = (0..5).map(|k| format!("frame_{k:04}.obj")).collect();
+        for n in &names {
+            assert!(d.join(dir).join(n).is_file(), "{dir}/{n}");
+        }
+        assert!(!d.join(dir).join("frame_0005.obj").exists());
+        let last = std::fs::read_to_string(d.join(dir).join("frame_0004.obj")).unwrap();
+        let z: f64 = last
+            .lines()
+            .rfind(|l| l.starts_with("v "))
+            .unwrap()
+            .split_whitespace()
+            .nth(3)
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!((z - 0.4).abs() < 1e-6, "{dir}: last vertex z = {z}");
+    }
+    // glTF to glTF keeps the rig.
+    ok(&["convert", s(&d.join("a.glb")), s(&d.join("copy.gltf"))]);
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("copy.gltf")).unwrap()).unwrap();
+    assert_eq!(doc["meshes"][0]["extras"]["targetNames"][4], "f04.obj");
+    assert_eq!(
+        doc["animations"][0]["channels"][0]["target"]["path"],
+        "weights"
+    );
+    if let Some(script) = std::env::var_os("MORPHKIT_GLTF_VALIDATOR") {
+        let st = Command::new("node")
+            .arg(script)
+            .args([d.join("a.glb"), d.join("b.gltf"), d.join("copy.gltf")])
+            .status()
+            .unwrap();
+        assert!(st.success());
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn convert_errors_are_one_line() {
+    let d = tmp_dir("errors");
+    let f = frames(&d, 2);
+    let missing = d.join("missing.obj");
+    let e = fails(&["convert", s(&missing), s(&d.join("x.ply"))]);
+    assert!(e.contains("missing.obj"), "{e}");
+    assert_eq!(e.lines().count(), 1, "{e}");
+    let e = fails(&["convert", s(&f[0]), s(&f[0])]);
+    assert!(e.contains("refusing to overwrite"), "{e}");
+    let e = fails(&["convert", s(&f[0]), s(&f[1]), s(&d.join("x.obj"))]);
+    assert!(e.contains("a sequence converts to an animation"), "{e}");
+    let e = fails(&["convert", s(&d.join("seq")), s(&d.join("seq"))]);
+    assert!(e.contains("refusing to overwrite"), "{e}");
+    ok(&["convert", s(&f[0]), s(&d.join("a.pc2"))]);
+    let e = fails(&["convert", s(&d.join("a.pc2")), s(&d.join("out"))]);
+    assert!(e.contains("reference"), "{e}");
+    let e = fails(&[
+        "convert",
+        &format!("{}/nothing-*.obj", d.display()),
+        s(&d.join("o.glb")),
+    ]);
+    assert!(e.contains("no files match"), "{e}");
+    let e = fails(&["info", s(&d.join("seq"))]);
+    assert!(e.contains("is a directory"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
