@@ -4,6 +4,7 @@ use crate::util::progress;
 use morphkit::mesh::Topology;
 use morphkit::TriMesh;
 use serde_json::{json, Value};
+use std::fmt::Write as _;
 use std::path::PathBuf;
 
 const EXAMPLES: &str = "\
@@ -73,48 +74,61 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
         pb.inc(1);
     }
     pb.finish_and_clear();
+    let mut out = String::new();
     if args.json {
-        let out = json!({ "files": reports, "shared_connectivity": shared });
-        println!("{}", serde_json::to_string_pretty(&out)?);
-        return Ok(());
+        let doc = json!({ "files": reports, "shared_connectivity": shared });
+        writeln!(out, "{}", serde_json::to_string_pretty(&doc)?)?;
+        return emit(&out);
     }
     for r in &reports {
-        println!("{}", r["file"].as_str().unwrap_or(""));
-        println!("  vertices               {}", r["vertices"]);
-        println!("  triangles              {}", r["triangles"]);
+        writeln!(out, "{}", r["file"].as_str().unwrap_or(""))?;
+        writeln!(out, "  vertices               {}", r["vertices"])?;
+        writeln!(out, "  triangles              {}", r["triangles"])?;
         if let Some(p) = r["polygons"].as_u64() {
-            println!("  polygons               {p}");
+            writeln!(out, "  polygons               {p}")?;
         }
-        println!(
+        writeln!(
+            out,
             "  bounding-box diagonal  {:.6}",
             r["bbox_diagonal"].as_f64().unwrap_or(f64::NAN)
-        );
-        println!("  boundary edges         {}", r["boundary_edges"]);
-        println!("  non-manifold edges     {}", r["non_manifold_edges"]);
-        println!("  components             {}", r["components"]);
-        println!("  closed                 {}", yes_no(&r["closed"]));
-        println!(
+        )?;
+        writeln!(out, "  boundary edges         {}", r["boundary_edges"])?;
+        writeln!(out, "  non-manifold edges     {}", r["non_manifold_edges"])?;
+        writeln!(out, "  components             {}", r["components"])?;
+        writeln!(out, "  closed                 {}", yes_no(&r["closed"]))?;
+        writeln!(
+            out,
             "  consistently oriented  {}",
             yes_no(&r["consistently_oriented"])
-        );
+        )?;
         match r["warnings"].as_array() {
             Some(w) if !w.is_empty() => {
                 for w in w {
-                    println!("  warning: {}", w.as_str().unwrap_or(""));
+                    writeln!(out, "  warning: {}", w.as_str().unwrap_or(""))?;
                 }
             }
-            _ => println!("  warnings               none"),
+            _ => writeln!(out, "  warnings               none")?,
         }
     }
     if reports.len() > 1 {
-        println!(
+        writeln!(
+            out,
             "shared connectivity: {}",
             if shared {
                 "yes, all files have the same vertex count and triangles"
             } else {
                 "no"
             }
-        );
+        )?;
     }
-    Ok(())
+    emit(&out)
+}
+
+/// Prints `text` to stdout; a closed pipe (`morphkit info … | head`) is not an error.
+fn emit(text: &str) -> anyhow::Result<()> {
+    use std::io::Write as _;
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        r => Ok(r?),
+    }
 }

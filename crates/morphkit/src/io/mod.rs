@@ -14,7 +14,7 @@
 //! overwrite an input ([`check_not_input`]). Every error names the file.
 
 mod atomic;
-mod colors;
+pub mod colors;
 mod error;
 mod format;
 pub mod gltf;
