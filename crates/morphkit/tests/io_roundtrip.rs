@@ -249,3 +249,54 @@ fn read_shape_set_names_shapes_by_file() {
     assert_eq!(set.all_positions(), f.all_positions());
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn gltf_with_an_external_bin_file_reads() {
+    let d = tmp_dir("external");
+    let m = TriMesh::new(mesh().positions, mesh().triangles);
+    io::write_mesh(&d.join("inline.gltf"), &m).unwrap();
+    // Move the embedded buffer into a .bin file beside the JSON.
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("inline.gltf")).unwrap()).unwrap();
+    let uri = doc["buffers"][0]["uri"].as_str().unwrap().to_string();
+    let b64 = uri.split_once("base64,").unwrap().1;
+    let bin = decode_base64(b64);
+    assert_eq!(
+        bin.len() as u64,
+        doc["buffers"][0]["byteLength"].as_u64().unwrap()
+    );
+    std::fs::write(d.join("data.bin"), &bin).unwrap();
+    doc["buffers"][0]["uri"] = serde_json::json!("data.bin");
+    std::fs::write(d.join("external.gltf"), serde_json::to_vec(&doc).unwrap()).unwrap();
+    let back = io::read_mesh(&d.join("external.gltf")).unwrap();
+    assert_eq!(back.triangles, m.triangles);
+    assert!(max_diff(&back.positions, &m.positions) < 1e-6);
+    // Without the .bin file: a clean error naming the glTF file.
+    std::fs::remove_file(d.join("data.bin")).unwrap();
+    let e = io::read_mesh(&d.join("external.gltf"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("external.gltf"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+fn decode_base64(s: &str) -> Vec<u8> {
+    let val = |c: u8| match c {
+        b'A'..=b'Z' => c - b'A',
+        b'a'..=b'z' => c - b'a' + 26,
+        b'0'..=b'9' => c - b'0' + 52,
+        b'+' => 62,
+        _ => 63,
+    } as u32;
+    let mut out = Vec::new();
+    for chunk in s.as_bytes().chunks(4) {
+        let pad = chunk.iter().filter(|&&c| c == b'=').count();
+        let n = chunk
+            .iter()
+            .map(|&c| if c == b'=' { 0 } else { val(c) })
+            .fold(0u32, |a, v| a << 6 | v);
+        let bytes = [(n >> 16) as u8, (n >> 8) as u8, n as u8];
+        out.extend_from_slice(&bytes[..3 - pad]);
+    }
+    out
+}
