@@ -1,10 +1,182 @@
-//! `morphkit correspond`.
+//! `morphkit correspond`: a triangle correspondence between two meshes from marker pairs
+//! (Wang & Lee 2008, Sec. 3.1.2–3.1.3), saved once as JSON for `transfer` and synthesis.
+
+use anyhow::Context;
+use morphkit::io;
+use morphkit::transfer::{correspond, CorrespondenceOptions, CorrespondenceResult, Markers};
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+const EXAMPLES: &str = "\
+Examples:
+  morphkit correspond --source horse.obj.gz --target camel.obj.gz --markers markers.json --out corr.json
+  morphkit correspond --source cat.obj --target dog.obj --markers m.json --out corr.json \\
+      --warped-source cat-warped.obj --warped-target dog-warped.obj --report corr-report.json
+
+Markers are JSON {\"pairs\": [[source_vertex, target_vertex], ...]}, 0-based.
+The report lists each marker's residual after warping and the target triangles whose only
+match fails the normal test (places that need more markers).";
 
 /// Arguments of `morphkit correspond`.
 #[derive(clap::Args, Debug)]
-pub struct CorrespondArgs {}
+#[command(after_help = EXAMPLES)]
+pub struct CorrespondArgs {
+    /// Source mesh (the animated one).
+    #[arg(long, value_name = "MESH")]
+    pub source: PathBuf,
+    /// Target mesh.
+    #[arg(long, value_name = "MESH")]
+    pub target: PathBuf,
+    /// Marker pairs, JSON {"pairs": [[source, target], ...]}, 0-based.
+    #[arg(long, value_name = "JSON")]
+    pub markers: PathBuf,
+    /// Output correspondence file (JSON).
+    #[arg(long, value_name = "JSON")]
+    pub out: PathBuf,
+    /// Least-squares-mesh constraint weight ω (the paper's 10 000).
+    #[arg(long, default_value_t = morphkit::transfer::OMEGA)]
+    pub omega: f64,
+    /// Centroid radius, in mean edge lengths of the warped source mesh.
+    #[arg(long, default_value_t = 1.0)]
+    pub radius: f64,
+    /// Most source triangles kept per target triangle.
+    #[arg(long, default_value_t = 8)]
+    pub max_matches: usize,
+    /// Write the warped source mesh here (for inspection).
+    #[arg(long, value_name = "MESH")]
+    pub warped_source: Option<PathBuf>,
+    /// Write the warped target mesh here (for inspection).
+    #[arg(long, value_name = "MESH")]
+    pub warped_target: Option<PathBuf>,
+    /// Write a JSON report (timings, marker residuals, normal violations).
+    #[arg(long, value_name = "JSON")]
+    pub report: Option<PathBuf>,
+}
+
+/// Options from the command line.
+fn options(args: &CorrespondArgs) -> anyhow::Result<CorrespondenceOptions> {
+    anyhow::ensure!(
+        args.omega.is_finite() && args.omega > 0.0,
+        "--omega must be positive"
+    );
+    anyhow::ensure!(
+        args.radius.is_finite() && args.radius >= 0.0,
+        "--radius must be non-negative"
+    );
+    anyhow::ensure!(args.max_matches >= 1, "--max-matches must be at least 1");
+    let mut o = CorrespondenceOptions::default();
+    o.lsmesh.omega = args.omega;
+    o.radius_factor = args.radius;
+    o.max_matches = args.max_matches;
+    Ok(o)
+}
+
+/// Summary of a correspondence as JSON (shared with `morphkit transfer`'s report).
+pub fn summary(r: &CorrespondenceResult, seconds: f64) -> serde_json::Value {
+    let c = &r.correspondence;
+    let worst = c
+        .marker_residuals
+        .iter()
+        .map(|m| m.relative)
+        .fold(0.0, f64::max);
+    json!({
+        "seconds": seconds,
+        "source_triangles": c.source_triangles,
+        "target_triangles": c.target_triangles,
+        "markers": c.markers.len(),
+        "radius": c.radius,
+        "omega": c.omega,
+        "mean_matches_per_target_triangle": c.mean_matches(),
+        "normal_violations": c.normal_violations,
+        "max_marker_residual_relative": worst,
+        "marker_residuals": c.marker_residuals,
+    })
+}
+
+/// Prints the human-readable summary.
+pub fn print_summary(r: &CorrespondenceResult, seconds: f64) {
+    let c = &r.correspondence;
+    let worst = c
+        .marker_residuals
+        .iter()
+        .max_by(|a, b| a.relative.total_cmp(&b.relative));
+    eprintln!(
+        "correspondence: {} target triangles, {:.2} source triangles each on average, {:.2} s",
+        c.target_triangles,
+        c.mean_matches(),
+        seconds
+    );
+    if let Some(w) = worst {
+        eprintln!(
+            "largest marker residual after warping: marker [{}, {}], {:.2e} of the target size",
+            w.source, w.target, w.relative
+        );
+    }
+    if !c.normal_violations.is_empty() {
+        let head: Vec<String> = c
+            .normal_violations
+            .iter()
+            .take(10)
+            .map(|t| t.to_string())
+            .collect();
+        eprintln!(
+            "warning: {} target triangles have no source triangle with a compatible normal (add markers near them): {}{}",
+            c.normal_violations.len(),
+            head.join(", "),
+            if c.normal_violations.len() > 10 { ", …" } else { "" }
+        );
+    }
+}
 
 /// Runs `morphkit correspond`.
-pub fn run(_args: &CorrespondArgs) -> anyhow::Result<()> {
-    anyhow::bail!("'morphkit correspond' is not available in this build yet")
+pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
+    let opts = options(args)?;
+    let inputs = vec![
+        args.source.clone(),
+        args.target.clone(),
+        args.markers.clone(),
+    ];
+    for out in [
+        Some(&args.out),
+        args.warped_source.as_ref(),
+        args.warped_target.as_ref(),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        io::check_not_input(out, &inputs)?;
+    }
+    let source = io::read_mesh(&args.source)?;
+    let target = io::read_mesh(&args.target)?;
+    let markers = Markers::read(&args.markers)?;
+    let t0 = Instant::now();
+    let r = correspond(&source, &target, &markers, &opts).with_context(|| {
+        format!(
+            "correspondence of {} and {}",
+            args.source.display(),
+            args.target.display()
+        )
+    })?;
+    let secs = t0.elapsed().as_secs_f64();
+    print_summary(&r, secs);
+    io::write_atomic(&args.out, r.correspondence.to_json().as_bytes())
+        .with_context(|| format!("{}: cannot write", args.out.display()))?;
+    eprintln!("wrote {}", args.out.display());
+    if let Some(p) = &args.warped_source {
+        io::write_mesh(p, &source.with_positions(r.warped_source.clone()))?;
+        eprintln!("wrote {}", p.display());
+    }
+    if let Some(p) = &args.warped_target {
+        io::write_mesh(p, &target.with_positions(r.warped_target.clone()))?;
+        eprintln!("wrote {}", p.display());
+    }
+    if let Some(p) = &args.report {
+        let mut v = summary(&r, secs);
+        v["source"] = json!(args.source);
+        v["target"] = json!(args.target);
+        v["correspondence"] = json!(args.out);
+        crate::util::write_report(p, &v)?;
+    }
+    Ok(())
 }

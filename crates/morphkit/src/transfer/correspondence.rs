@@ -493,9 +493,9 @@ mod tests {
         // Matched triangles point the same way on the original spheres.
         let (_, ns) = centroids_and_normals(&s.positions, &s.triangles);
         let (_, nt) = centroids_and_normals(&t.positions, &t.triangles);
-        for tt in 0..t.num_triangles() {
+        for (tt, n) in nt.iter().enumerate() {
             for &ss in c.matches_of(tt) {
-                assert!(dot(ns[ss as usize], nt[tt]) > 0.5, "{tt} ↔ {ss}");
+                assert!(dot(ns[ss as usize], *n) > 0.5, "{tt} ↔ {ss}");
             }
         }
         let bad = Correspondence {
