@@ -13,9 +13,11 @@ pub fn progress(len: u64, message: &str) -> ProgressBar {
         pb.set_draw_target(ProgressDrawTarget::hidden());
     }
     pb.set_style(
-        ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}")
-            .expect("valid template")
-            .progress_chars("=> "),
+        ProgressStyle::with_template(
+            "{msg:>12} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
     );
     pb.set_message(message.to_string());
     pb
@@ -24,7 +26,6 @@ pub fn progress(len: u64, message: &str) -> ProgressBar {
 /// Writes a JSON report atomically (temporary file, then rename).
 pub fn write_report(path: &Path, value: &serde_json::Value) -> anyhow::Result<()> {
     let text = serde_json::to_string_pretty(value)?;
-    morphkit::io::write_atomic(path, text.as_bytes())
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    morphkit::io::write_atomic(path, text.as_bytes()).map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(())
 }

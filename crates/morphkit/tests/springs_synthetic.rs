@@ -3,8 +3,8 @@
 
 use morphkit::mesh::{bbox_diagonal, generate, ShapeSet, Topology, TriMesh};
 use morphkit::springs::{
-    blend, blend_metrics, linear_blend, BlendError, BlendOptions, FixedVertices, PhysicalBlend,
-    Weights,
+    blend, blend_metrics, linear_blend, BlendError, BlendOptions, FillOrdering, FixedVertices,
+    LinearSolver, PhysicalBlend, Weights,
 };
 
 fn two(m: &TriMesh, other: Vec<[f64; 3]>) -> ShapeSet {
@@ -247,4 +247,39 @@ fn bad_input_gives_errors_or_documented_outcomes() {
         ),
         Err(BlendError::InvalidOption(_))
     ));
+}
+
+#[test]
+fn solver_variants_agree() {
+    let s = bent_bar();
+    let d = bbox_diagonal(s.positions(0));
+    let mut results = Vec::new();
+    for linear_solver in [LinearSolver::Direct, LinearSolver::LaggedPcg] {
+        for ordering in [FillOrdering::Amd, FillOrdering::NestedDissection] {
+            let opts = BlendOptions {
+                linear_solver,
+                ordering,
+                gradient_tolerance: 1e-10,
+                ..Default::default()
+            };
+            let mut solver = PhysicalBlend::new(&s, &opts).unwrap();
+            let mut last = None;
+            for a in [0.25, 0.5, 0.75] {
+                let r = solver.solve(&Weights::Alpha(a)).unwrap();
+                assert!(
+                    r.stats.converged,
+                    "{linear_solver:?}/{ordering:?} at α = {a}"
+                );
+                last = Some(r);
+            }
+            let r = last.unwrap();
+            if linear_solver == LinearSolver::Direct {
+                assert_eq!(r.stats.cg_iterations, 0);
+            }
+            results.push(r.positions);
+        }
+    }
+    for r in &results[1..] {
+        assert!(max_dist(r, &results[0]) < 1e-6 * d);
+    }
 }

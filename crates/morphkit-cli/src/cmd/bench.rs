@@ -1,10 +1,169 @@
-//! `morphkit bench`.
+//! `morphkit bench`: speed of the physical-blend solver (and of transfer, with data).
+//!
+//! The spring suite times a 36-step α sequence (the paper's Table I protocol) at about 2k,
+//! 8.5k and 18.6k vertices, on generated bent tubes and, when the data directory is given, on
+//! real meshes: the horse (8.4k vertices, reference ↔ pose 5) and the armadillo (14.6k, bent
+//! procedurally: it has no poses).
+
+use morphkit::mesh::{generate, ShapeSet};
+use morphkit::springs::{BlendOptions, PhysicalBlend, Weights};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// Arguments of `morphkit bench`.
 #[derive(clap::Args, Debug)]
-pub struct BenchArgs {}
+#[command(
+    after_help = "Examples:\n  morphkit bench\n  morphkit bench --data ../shared/data --report bench.json\n  morphkit bench --suite springs --steps 36"
+)]
+pub struct BenchArgs {
+    /// Which suite to run: springs, transfer, or all.
+    #[arg(long, default_value = "all")]
+    suite: String,
+    /// Directory of the real test meshes (defaults to $MORPHKIT_DATA when set).
+    #[arg(long)]
+    data: Option<PathBuf>,
+    /// Interpolation steps per sequence (the paper uses 36).
+    #[arg(long, default_value_t = 36)]
+    steps: usize,
+    /// Write the measurements as JSON.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+fn peak_rss_mib() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
+/// Times one 36-step sequence and prints a table row.
+fn time_sequence(name: &str, shapes: &ShapeSet, steps: usize) -> anyhow::Result<serde_json::Value> {
+    let t0 = Instant::now();
+    let mut solver = PhysicalBlend::new(shapes, &BlendOptions::default())?;
+    let setup = t0.elapsed().as_secs_f64();
+    let mut iters = 0;
+    let mut facts = 0;
+    let mut cgs = 0;
+    let mut worst_grad: f64 = 0.0;
+    let mut all_converged = true;
+    let t1 = Instant::now();
+    for k in 0..steps {
+        let a = k as f64 / (steps.max(2) - 1) as f64;
+        let r = solver.solve(&Weights::Alpha(a))?;
+        iters += r.stats.newton_iterations;
+        facts += r.stats.factorizations;
+        cgs += r.stats.cg_iterations;
+        worst_grad = worst_grad.max(r.stats.gradient_norm / r.stats.gradient_tolerance);
+        all_converged &= r.stats.converged;
+    }
+    let per_step = t1.elapsed().as_secs_f64() / steps as f64;
+    let row = json!({
+        "mesh": name,
+        "vertices": shapes.num_vertices(),
+        "springs": solver.springs().len(),
+        "free_dofs": solver.num_free_dofs(),
+        "factor_nnz": solver.factor_nnz(),
+        "setup_ms": setup * 1e3,
+        "ms_per_step": per_step * 1e3,
+        "newton_iterations_per_step": iters as f64 / steps as f64,
+        "factorizations_per_step": facts as f64 / steps as f64,
+        "cg_iterations_per_step": cgs as f64 / steps as f64,
+        "all_converged": all_converged,
+        "worst_gradient_over_tolerance": worst_grad,
+        "peak_rss_mib": peak_rss_mib(),
+    });
+    println!(
+        "{:<28} {:>7} {:>8} {:>9.1} {:>10.2} {:>7.2} {:>7.2} {:>7.1} {:>9}",
+        name,
+        shapes.num_vertices(),
+        solver.springs().len(),
+        setup * 1e3,
+        per_step * 1e3,
+        iters as f64 / steps as f64,
+        facts as f64 / steps as f64,
+        cgs as f64 / steps as f64,
+        peak_rss_mib()
+            .map(|m| format!("{m:.0}"))
+            .unwrap_or_else(|| "-".into())
+    );
+    Ok(row)
+}
+
+/// A closed tube with about `target` vertices, bent by 90° over its whole length.
+fn bent_tube(target: usize) -> ShapeSet {
+    let around = ((target as f64 / 4.0).sqrt()).round().max(6.0) as usize;
+    let along = (target / around).max(2) - 1;
+    let m = generate::tube(0.5, 4.0, around, along, true);
+    let bent = generate::bend(&m.positions, 0.0, 4.0, 90f64.to_radians());
+    ShapeSet::new(
+        m.clone(),
+        vec![
+            ("straight".into(), m.positions.clone()),
+            ("bent".into(), bent),
+        ],
+    )
+    .expect("generated shapes share connectivity")
+}
+
+fn springs_suite(data: Option<&Path>, steps: usize) -> anyhow::Result<Vec<serde_json::Value>> {
+    println!("physical blend, {steps} steps of α in [0, 1], default options (tolerance 1e-9 · k0)");
+    println!(
+        "{:<28} {:>7} {:>8} {:>9} {:>10} {:>7} {:>7} {:>7} {:>9}",
+        "mesh", "verts", "springs", "setup ms", "ms/step", "newton", "factor", "cg", "peak MiB"
+    );
+    let mut rows = Vec::new();
+    for n in [2_200, 8_500, 18_600] {
+        rows.push(time_sequence(&format!("tube-{n}"), &bent_tube(n), steps)?);
+    }
+    if let Some(dir) = data {
+        let horse = [
+            dir.join("sumner-horse-camel/horse-reference.obj.gz"),
+            dir.join("sumner-horse-camel/horse-05.obj.gz"),
+        ];
+        let set = morphkit::io::read_shape_set(&horse)?;
+        rows.push(time_sequence("horse ref↔05 (8.4k)", &set, steps)?);
+        let arm = morphkit::io::read_mesh(&dir.join("generic-meshes/armadillo.obj.gz"))?;
+        let (lo, hi) = arm.bounding_box();
+        let mid = 0.5 * (lo[0] + hi[0]);
+        let bent = generate::bend(&arm.positions, mid, hi[0] - mid, 60f64.to_radians());
+        let set = ShapeSet::new(
+            arm.clone(),
+            vec![
+                ("armadillo".into(), arm.positions.clone()),
+                ("bent".into(), bent),
+            ],
+        )?;
+        rows.push(time_sequence("armadillo bent 60° (14.6k)", &set, steps)?);
+    }
+    Ok(rows)
+}
 
 /// Runs `morphkit bench`.
-pub fn run(_args: &BenchArgs) -> anyhow::Result<()> {
-    anyhow::bail!("'morphkit bench' is not available in this build yet")
+pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    let data = args
+        .data
+        .clone()
+        .or_else(|| std::env::var_os("MORPHKIT_DATA").map(PathBuf::from));
+    let mut report = json!({ "threads": 1 });
+    if matches!(args.suite.as_str(), "springs" | "all") {
+        report["springs"] = json!(springs_suite(data.as_deref(), args.steps)?);
+    }
+    if matches!(args.suite.as_str(), "transfer" | "all") {
+        match data.as_deref() {
+            Some(dir) => report["transfer"] = super::bench_transfer::run_transfer_bench(dir)?,
+            None => println!("transfer suite skipped: it needs --data DIR or MORPHKIT_DATA (elephant, horse, camel)"),
+        }
+    }
+    if !matches!(args.suite.as_str(), "springs" | "transfer" | "all") {
+        anyhow::bail!(
+            "unknown suite '{}': use springs, transfer or all",
+            args.suite
+        );
+    }
+    if let Some(path) = &args.report {
+        crate::util::write_report(path, &report)?;
+    }
+    Ok(())
 }

@@ -12,8 +12,6 @@
 //! and the three triangular solves with the translation convention; the source gradients and
 //! their mapping through the correspondence are timed apart.
 
-#![allow(dead_code)] // until `morphkit bench` calls `run_transfer_bench`; remove then.
-
 use morphkit::io::{read_mesh, read_shape_set};
 use morphkit::transfer::{
     correspond, AnimationTransfer, Correspondence, CorrespondenceOptions, Markers, TransferOptions,

@@ -34,8 +34,7 @@ pub fn slerp(a: &Matrix3<f64>, b: &Matrix3<f64>, t: f64) -> Matrix3<f64> {
     // shortest; nlerp through a perturbed midpoint picks one deterministically.
     let q = qa.try_slerp(&qb, t, 1e-12).unwrap_or_else(|| {
         let axis = Vector3::x_axis();
-        let mid = qa * UnitQuaternion::from_axis_angle(&axis, std::f64::consts::PI * t);
-        mid
+        qa * UnitQuaternion::from_axis_angle(&axis, std::f64::consts::PI * t)
     });
     q.to_rotation_matrix().into_inner()
 }

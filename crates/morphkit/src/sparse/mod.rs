@@ -18,6 +18,7 @@
 mod cholesky;
 mod dirichlet;
 mod matrix;
+pub mod metis;
 
 pub use cholesky::{Cholesky, Ordering, SymmetricPattern};
 pub use dirichlet::Dirichlet;

@@ -25,13 +25,16 @@
 mod constraints;
 pub mod energy;
 pub mod metrics;
+mod pcg;
 mod solver;
 mod spring_set;
 mod weights;
 
 pub use constraints::{Constraints, FixedVertices};
 pub use metrics::{blend_metrics, linear_blend, BlendMetrics};
-pub use solver::{blend, BlendOptions, BlendResult, FrameStats, PhysicalBlend};
+pub use solver::{
+    blend, BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, PhysicalBlend,
+};
 pub use spring_set::{Spring, SpringKind, SpringOptions, SpringSet, StiffnessRule};
 pub use weights::{RestLengths, Weights};
 

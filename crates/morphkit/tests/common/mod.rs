@@ -7,7 +7,11 @@ use std::path::PathBuf;
 pub fn data_dir() -> Option<PathBuf> {
     let dir = std::env::var_os("MORPHKIT_DATA")?;
     let dir = PathBuf::from(dir);
-    assert!(dir.is_dir(), "MORPHKIT_DATA={} is set but is not a directory", dir.display());
+    assert!(
+        dir.is_dir(),
+        "MORPHKIT_DATA={} is set but is not a directory",
+        dir.display()
+    );
     Some(dir)
 }
 
@@ -15,7 +19,11 @@ pub fn data_dir() -> Option<PathBuf> {
 /// set but the file is missing.
 pub fn data_file(rel: &str) -> Option<PathBuf> {
     let p = data_dir()?.join(rel);
-    assert!(p.is_file(), "MORPHKIT_DATA is set but {} is missing", p.display());
+    assert!(
+        p.is_file(),
+        "MORPHKIT_DATA is set but {} is missing",
+        p.display()
+    );
     Some(p)
 }
 
