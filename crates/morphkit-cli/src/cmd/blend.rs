@@ -1,10 +1,300 @@
-//! `morphkit blend`.
+//! `morphkit blend`: physical (or linear) blendshapes of a base and targets.
+//!
+//! Weights, in order of precedence of the flags (exactly one is required):
+//! - `--alpha A`: two shapes, rest lengths `(1 − A) r_base + A r_target` (Ma et al. Eq. 1);
+//! - `--weights w1,w2,…`: one weight per target, artist "delta" form `base + Σ wᵢ (targetᵢ − base)`
+//!   (what glTF morph targets and DCC blendshape nodes use); with `--convex`, one weight per
+//!   shape including the base, summing to 1 (the paper's Sec. 3.3);
+//! - `--frames N`: `N` frames with α from 0 to 1 (`αₖ = k / (N − 1)`), one target only;
+//! - `--weights-file F`: one weight vector per frame, JSON (`{"frames": [[…], …]}` or a bare
+//!   array of arrays) or CSV (one row per frame; `#` comments and a non-numeric header skipped).
+
+use crate::util::{progress, write_report};
+use anyhow::{bail, Context};
+use morphkit::io::{self, FramesOptions};
+use morphkit::mesh::{ShapeSet, Topology};
+use morphkit::springs::{
+    blend_metrics, linear_blend, BlendOptions, FixedVertices, PhysicalBlend, SpringOptions, Weights,
+};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+const EXAMPLES: &str = "\
+Examples:
+  morphkit blend --base straight.obj --target bent.obj --alpha 0.5 --out half.obj
+  morphkit blend --base rest.obj --target bend.obj --frames 36 --out bend.glb --report bend.json
+  morphkit blend --base neutral.obj --target jawOpen.obj --target smile.obj --weights 0.7,0.3 --out face.obj
+  morphkit blend --base a.obj --target b.obj --target c.obj --weights 0.2,0.3,0.5 --convex --out mix.ply
+  morphkit blend --base rest.obj --target bend.obj --weights-file keys.csv --fixed pinned.json --out anim.pc2
+  morphkit blend --base rest.obj --target bend.obj --frames 36 --linear --out linear.glb
+
+OUT: a directory (no extension) gets frame_0000.obj, …; .glb/.gltf gets an animation; .pc2 a
+point cache; .obj/.ply/.off a single mesh (one frame only). --fixed FILE.json holds
+{\"fixed\": [vertex ids]} (0-based) or a bare array. Without fixed vertices, each connected
+component keeps only its rigid motion free and is aligned to the linear blend.";
 
 /// Arguments of `morphkit blend`.
 #[derive(clap::Args, Debug)]
-pub struct BlendArgs {}
+#[command(after_help = EXAMPLES)]
+pub struct BlendArgs {
+    /// The base shape (shape 0).
+    #[arg(long)]
+    pub base: PathBuf,
+    /// A target shape; repeat for several. All must share the base's connectivity.
+    #[arg(long = "target", required = true)]
+    pub targets: Vec<PathBuf>,
+    /// Blend factor between the base and a single target.
+    #[arg(long, group = "w")]
+    pub alpha: Option<f64>,
+    /// Comma-separated weights (one per target, or one per shape with --convex).
+    #[arg(long, group = "w", value_delimiter = ',', allow_hyphen_values = true)]
+    pub weights: Option<Vec<f64>>,
+    /// Number of frames with α from 0 to 1 (single target).
+    #[arg(long, group = "w")]
+    pub frames: Option<usize>,
+    /// File of per-frame weight vectors (JSON or CSV).
+    #[arg(long, group = "w")]
+    pub weights_file: Option<PathBuf>,
+    /// Weights are convex over all shapes (base first) instead of per-target deltas.
+    #[arg(long)]
+    pub convex: bool,
+    /// Boundary conditions: auto (vertices static in all shapes), none, or a JSON file of ids.
+    #[arg(long, default_value = "auto")]
+    pub fixed: String,
+    /// Classic linear blendshapes instead of the physical blend.
+    #[arg(long)]
+    pub linear: bool,
+    /// Base spring stiffness k0 (only ratios matter).
+    #[arg(long, default_value_t = 1.0)]
+    pub k0: f64,
+    /// Leave out bending springs (structure springs only).
+    #[arg(long)]
+    pub no_bending: bool,
+    /// Convergence tolerance on the gradient, in units of k0 × strain.
+    #[arg(long, default_value_t = 1e-6)]
+    pub tolerance: f64,
+    /// Frames per second of a glTF animation output.
+    #[arg(long, default_value_t = 24.0)]
+    pub fps: f64,
+    /// Output: directory of OBJ frames, .glb/.gltf, .pc2, or a single .obj/.ply/.off.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Write per-frame solver statistics, timings and quality metrics as JSON.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+/// Reads per-frame weight vectors from JSON or CSV.
+pub fn read_weights_file(path: &Path) -> anyhow::Result<Vec<Vec<f64>>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read the weights file", path.display()))?;
+    let is_json = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+        || text.trim_start().starts_with(['[', '{']);
+    let rows: Vec<Vec<f64>> = if is_json {
+        let v: serde_json::Value = serde_json::from_str(&text)
+            .with_context(|| format!("{}: invalid JSON", path.display()))?;
+        let arr = v.get("frames").or_else(|| v.get("weights")).unwrap_or(&v);
+        serde_json::from_value(arr.clone()).with_context(|| {
+            format!(
+                "{}: expected an array of weight arrays (or {{\"frames\": [[…], …]}})",
+                path.display()
+            )
+        })?
+    } else {
+        let mut rows = Vec::new();
+        for (n, line) in text.lines().enumerate() {
+            let line = line.trim();
+            if line.is_empty() || line.starts_with('#') {
+                continue;
+            }
+            let parsed: Result<Vec<f64>, _> = line
+                .split([',', ';', '\t'])
+                .map(|s| s.trim().parse::<f64>())
+                .collect();
+            match parsed {
+                Ok(r) => rows.push(r),
+                Err(_) if rows.is_empty() && n == 0 => continue, // header
+                Err(e) => bail!("{}: line {}: {e} in '{line}'", path.display(), n + 1),
+            }
+        }
+        rows
+    };
+    if rows.is_empty() {
+        bail!("{}: no weight rows", path.display());
+    }
+    Ok(rows)
+}
+
+fn read_fixed(spec: &str) -> anyhow::Result<FixedVertices> {
+    Ok(match spec {
+        "auto" => FixedVertices::Auto,
+        "none" => FixedVertices::None,
+        file => {
+            let text = std::fs::read_to_string(file).with_context(|| {
+                format!("{file}: cannot read the fixed-vertex file (or use auto / none)")
+            })?;
+            let v: serde_json::Value =
+                serde_json::from_str(&text).with_context(|| format!("{file}: invalid JSON"))?;
+            let ids = v.get("fixed").unwrap_or(&v);
+            let ids: Vec<u32> = serde_json::from_value(ids.clone())
+                .with_context(|| format!("{file}: expected {{\"fixed\": [vertex ids]}} or an array of non-negative integers"))?;
+            FixedVertices::Ids(ids)
+        }
+    })
+}
+
+/// The weight vectors of every frame.
+fn frame_weights(a: &BlendArgs, n_shapes: usize) -> anyhow::Result<Vec<Weights>> {
+    let wrap = |w: Vec<f64>| {
+        if a.convex {
+            Weights::Convex(w)
+        } else {
+            Weights::Delta(w)
+        }
+    };
+    if let Some(alpha) = a.alpha {
+        return Ok(vec![Weights::Alpha(alpha)]);
+    }
+    if let Some(w) = &a.weights {
+        return Ok(vec![wrap(w.clone())]);
+    }
+    if let Some(n) = a.frames {
+        if n_shapes != 2 {
+            bail!("--frames needs exactly one --target (got {}); use --weights-file for several targets", n_shapes - 1);
+        }
+        if n < 2 {
+            bail!("--frames needs at least 2 frames (α = 0 and 1), got {n}");
+        }
+        return Ok((0..n)
+            .map(|k| Weights::Alpha(k as f64 / (n - 1) as f64))
+            .collect());
+    }
+    if let Some(f) = &a.weights_file {
+        return Ok(read_weights_file(f)?.into_iter().map(wrap).collect());
+    }
+    bail!("give one of --alpha, --weights, --frames or --weights-file")
+}
+
+fn weights_json(w: &Weights) -> serde_json::Value {
+    match w {
+        Weights::Alpha(a) => json!({ "alpha": a }),
+        Weights::Convex(v) => json!({ "convex": v }),
+        Weights::Delta(v) => json!({ "delta": v }),
+    }
+}
 
 /// Runs `morphkit blend`.
-pub fn run(_args: &BlendArgs) -> anyhow::Result<()> {
-    anyhow::bail!("'morphkit blend' is not available in this build yet")
+pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let mut inputs = vec![a.base.clone()];
+    inputs.extend(a.targets.iter().cloned());
+    io::check_not_input(&a.out, &inputs)?;
+    if let Some(r) = &a.report {
+        io::check_not_input(r, &inputs)?;
+    }
+    let shapes = io::read_shape_set(&inputs)?;
+    let weights = frame_weights(a, shapes.len())?;
+    for (k, w) in weights.iter().enumerate() {
+        w.coefficients(shapes.len())
+            .with_context(|| format!("frame {k}: invalid weights"))?;
+    }
+    let single_mesh = io::Format::from_path(&a.out).is_some_and(|f| f.is_single_mesh());
+    if single_mesh && weights.len() != 1 {
+        bail!("{}: a single-mesh output holds one frame, but {} frames were asked for; use a directory, .glb or .pc2", a.out.display(), weights.len());
+    }
+    let topology = Topology::new(shapes.num_vertices(), shapes.triangles());
+    let options = BlendOptions {
+        springs: SpringOptions {
+            k0: a.k0,
+            bending: !a.no_bending,
+            ..Default::default()
+        },
+        fixed: read_fixed(&a.fixed)?,
+        gradient_tolerance: a.tolerance,
+        ..Default::default()
+    };
+    let t_setup = Instant::now();
+    let mut solver = if a.linear {
+        None
+    } else {
+        Some(PhysicalBlend::new(&shapes, &options)?)
+    };
+    let setup_seconds = t_setup.elapsed().as_secs_f64();
+
+    let bar = progress(
+        weights.len() as u64,
+        if a.linear { "linear" } else { "physical" },
+    );
+    let mut frames = Vec::with_capacity(weights.len());
+    let mut rows = Vec::with_capacity(weights.len());
+    let mut unconverged = Vec::new();
+    for (k, w) in weights.iter().enumerate() {
+        let linear = linear_blend(&shapes, w)?;
+        let linear_metrics = blend_metrics(&shapes, &topology, w, &linear)?;
+        let mut row = json!({ "frame": k, "weights": weights_json(w), "linear": linear_metrics });
+        let positions = match solver.as_mut() {
+            None => linear,
+            Some(s) => {
+                let r = s.solve(w).with_context(|| format!("frame {k}"))?;
+                if !r.stats.converged {
+                    unconverged.push(k);
+                }
+                row["physical"] = json!(blend_metrics(&shapes, &topology, w, &r.positions)?);
+                row["solver"] = json!(r.stats);
+                r.positions
+            }
+        };
+        if positions.iter().flatten().any(|v| !v.is_finite()) {
+            bail!("frame {k}: the result has non-finite coordinates; nothing was written");
+        }
+        frames.push((format!("frame_{k:04}"), positions));
+        rows.push(row);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    if !unconverged.is_empty() {
+        eprintln!(
+            "warning: {} of {} frames did not reach the gradient tolerance {} (frames {:?}); see --report for their gradient norms",
+            unconverged.len(),
+            weights.len(),
+            a.tolerance,
+            &unconverged[..unconverged.len().min(10)]
+        );
+    }
+    let out_set = ShapeSet::new(shapes.base().clone(), frames)?;
+    let t_write = Instant::now();
+    if single_mesh {
+        io::write_mesh(&a.out, &out_set.mesh(0))?;
+    } else {
+        io::write_frames(
+            &a.out,
+            &out_set,
+            &FramesOptions {
+                fps: a.fps,
+                inputs: inputs.clone(),
+            },
+        )?;
+    }
+    let write_seconds = t_write.elapsed().as_secs_f64();
+    if let Some(r) = &a.report {
+        let report = json!({
+            "command": "blend",
+            "method": if a.linear { "linear" } else { "physical" },
+            "inputs": inputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+            "output": a.out.display().to_string(),
+            "vertices": shapes.num_vertices(),
+            "triangles": shapes.triangles().len(),
+            "springs": solver.as_ref().map(|s| s.springs().len()),
+            "free_dofs": solver.as_ref().map(|s| s.num_free_dofs()),
+            "fixed_vertices": solver.as_ref().map(|s| s.constraints().fixed.len()),
+            "timings": { "setup_seconds": setup_seconds, "write_seconds": write_seconds, "total_seconds": start.elapsed().as_secs_f64() },
+            "frames": rows,
+        });
+        write_report(r, &report)?;
+    }
+    eprintln!("wrote {} frame(s) to {}", weights.len(), a.out.display());
+    Ok(())
 }
