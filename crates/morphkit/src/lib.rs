@@ -10,6 +10,26 @@
 //!   marker correspondence by least-squares meshes and deformation-gradient transfer onto a
 //!   different mesh. See [`transfer`].
 //!
+//! Set-up once, then many cheap solves (here a slider from straight to bent):
+//!
+//! ```
+//! use morphkit::mesh::{generate, ShapeSet};
+//! use morphkit::springs::{BlendOptions, PhysicalBlend, Weights};
+//!
+//! let bar = generate::bar(4.0, 0.6, 2, 16);
+//! let bent = generate::bend(&bar.positions, 2.0, 2.0, 2.0);
+//! let shapes = ShapeSet::new(
+//!     bar.clone(),
+//!     vec![("straight".into(), bar.positions.clone()), ("bent".into(), bent)],
+//! )?;
+//! let mut solver = PhysicalBlend::new(&shapes, &BlendOptions::default())?;
+//! for k in 0..=10 {
+//!     let result = solver.solve(&Weights::Alpha(k as f64 / 10.0))?;
+//!     assert!(result.stats.converged);
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! Foundations: [`mesh`] (connectivity, topology, shape sets), [`io`] (OBJ, PLY, OFF, glTF/GLB,
 //! PC2), [`sparse`] (faer sparse Cholesky with symbolic reuse) and [`geom`] (small dense math).
 #![warn(missing_docs)]

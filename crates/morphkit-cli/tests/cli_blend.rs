@@ -1,0 +1,256 @@
+//! `morphkit demo` and `morphkit blend`, run as the built binary.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn tmp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("morphkit-cli-blend-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn morphkit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_morphkit"))
+        .args(args)
+        .output()
+        .expect("run morphkit")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = morphkit(args);
+    assert!(
+        out.status.success(),
+        "morphkit {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn fails(args: &[&str]) -> String {
+    let out = morphkit(args);
+    assert!(!out.status.success(), "morphkit {args:?} should fail");
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(err.starts_with("error: "), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    err
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Reads the `v` lines of an OBJ file.
+fn vertices(path: &Path) -> Vec<[f64; 3]> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("v "))
+        .map(|l| {
+            let v: Vec<f64> = l
+                .split_whitespace()
+                .skip(1)
+                .map(|x| x.parse().unwrap())
+                .collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect()
+}
+
+#[test]
+fn demo_writes_its_files_and_shows_the_linear_blend_shrinking() {
+    let d = tmp_dir("demo");
+    let out = ok(&["demo", "--out", s(&d)]);
+    assert!(out.contains("volume / interpolated volume"), "{out}");
+    for f in [
+        "base.obj",
+        "target.obj",
+        "linear-0.5.obj",
+        "linear-0.5.glb",
+        "physical-0.5.obj",
+        "physical-0.5.glb",
+        "physical-sequence.glb",
+    ] {
+        assert!(d.join(f).is_file(), "{f} missing");
+    }
+    // The physical blend keeps the bar's length; the linear one cuts the corner.
+    let (b, l, p) = (
+        vertices(&d.join("base.obj")),
+        vertices(&d.join("linear-0.5.obj")),
+        vertices(&d.join("physical-0.5.obj")),
+    );
+    let span = |v: &[[f64; 3]]| {
+        let (a, z) = (v[v.len() - 2], v[v.len() - 1]); // the two cap centres
+        ((a[0] - z[0]).powi(2) + (a[1] - z[1]).powi(2) + (a[2] - z[2]).powi(2)).sqrt()
+    };
+    assert!(
+        span(&l) < span(&p),
+        "linear end-to-end {} vs physical {}",
+        span(&l),
+        span(&p)
+    );
+    assert!(span(&p) < span(&b));
+}
+
+#[test]
+fn blend_writes_frames_reports_and_refuses_bad_input() {
+    let d = tmp_dir("blend");
+    ok(&["demo", "--out", s(&d)]);
+    let (base, target) = (d.join("base.obj"), d.join("target.obj"));
+    // α = 0 gives the base back, α = 1 the target.
+    for (alpha, want) in [("0", &base), ("1", &target)] {
+        let out = d.join(format!("a{alpha}.obj"));
+        ok(&[
+            "blend",
+            "--base",
+            s(&base),
+            "--target",
+            s(&target),
+            "--alpha",
+            alpha,
+            "--out",
+            s(&out),
+        ]);
+        let (got, want) = (vertices(&out), vertices(want));
+        let err = got
+            .iter()
+            .zip(&want)
+            .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
+            .fold(0.0, f64::max);
+        assert!(err < 1e-5, "α = {alpha}: max error {err}");
+    }
+    let report = d.join("r.json");
+    ok(&[
+        "blend",
+        "--base",
+        s(&base),
+        "--target",
+        s(&target),
+        "--frames",
+        "5",
+        "--out",
+        s(&d.join("frames")),
+        "--report",
+        s(&report),
+    ]);
+    assert!(d.join("frames/frame_0004.obj").is_file());
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let frames = r["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 5);
+    for f in frames {
+        assert_eq!(f["solver"]["converged"], true);
+        let (p, l) = (
+            f["physical"]["edge_length_rms"].as_f64().unwrap(),
+            f["linear"]["edge_length_rms"].as_f64().unwrap(),
+        );
+        assert!(p <= l + 1e-9, "physical {p} vs linear {l}");
+    }
+    // Linear blend with a weights file (CSV with a header).
+    std::fs::write(d.join("w.csv"), "w\n0.25\n0.75\n").unwrap();
+    ok(&[
+        "blend",
+        "--base",
+        s(&base),
+        "--target",
+        s(&target),
+        "--weights-file",
+        s(&d.join("w.csv")),
+        "--linear",
+        "--out",
+        s(&d.join("lin.pc2")),
+    ]);
+    assert!(d.join("lin.pc2").is_file());
+
+    let e = fails(&[
+        "blend",
+        "--base",
+        s(&base),
+        "--target",
+        s(&target),
+        "--alpha",
+        "nan",
+        "--out",
+        s(&d.join("x.obj")),
+    ]);
+    assert!(e.contains("not finite"), "{e}");
+    let e = fails(&[
+        "blend",
+        "--base",
+        s(&base),
+        "--target",
+        s(&target),
+        "--weights",
+        "0.5,0.7",
+        "--convex",
+        "--out",
+        s(&d.join("x.obj")),
+    ]);
+    assert!(e.contains("sum to 1"), "{e}");
+    let e = fails(&[
+        "blend",
+        "--base",
+        s(&base),
+        "--target",
+        s(&target),
+        "--alpha",
+        "0.5",
+        "--out",
+        s(&base),
+    ]);
+    assert!(e.contains("overwrite"), "{e}");
+    let e = fails(&[
+        "blend",
+        "--base",
+        s(&base),
+        "--target",
+        s(&target),
+        "--frames",
+        "3",
+        "--out",
+        s(&d.join("one.obj")),
+    ]);
+    assert!(e.contains("one frame"), "{e}");
+    let e = fails(&[
+        "blend",
+        "--base",
+        s(&d),
+        "--target",
+        s(&target),
+        "--alpha",
+        "0.5",
+        "--out",
+        s(&d.join("x.obj")),
+    ]);
+    assert!(e.contains("directory"), "{e}");
+    std::fs::write(d.join("fixed.json"), "{\"fixed\": [0]}").unwrap();
+    let e = fails(&[
+        "blend",
+        "--base",
+        s(&base),
+        "--target",
+        s(&target),
+        "--alpha",
+        "0.5",
+        "--fixed",
+        s(&d.join("fixed.json")),
+        "--out",
+        s(&d.join("x.obj")),
+    ]);
+    assert!(e.contains("rotate"), "{e}");
+    // Another connectivity: a different generated mesh.
+    std::fs::write(d.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let e = fails(&[
+        "blend",
+        "--base",
+        s(&base),
+        "--target",
+        s(&d.join("tri.obj")),
+        "--alpha",
+        "0.5",
+        "--out",
+        s(&d.join("x.obj")),
+    ]);
+    assert!(e.contains("vertices"), "{e}");
+    assert!(!d.join("x.obj").exists(), "no partial output");
+}
