@@ -1,44 +1,9 @@
 //! `morphkit demo` and `morphkit blend`, run as the built binary.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+use common::*;
 
-fn tmp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("morphkit-cli-blend-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn morphkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_morphkit"))
-        .args(args)
-        .output()
-        .expect("run morphkit")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = morphkit(args);
-    assert!(
-        out.status.success(),
-        "morphkit {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn fails(args: &[&str]) -> String {
-    let out = morphkit(args);
-    assert!(!out.status.success(), "morphkit {args:?} should fail");
-    let err = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(err.starts_with("error: "), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    err
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+use std::path::Path;
 
 /// Reads the `v` lines of an OBJ file.
 fn vertices(path: &Path) -> Vec<[f64; 3]> {
@@ -59,7 +24,7 @@ fn vertices(path: &Path) -> Vec<[f64; 3]> {
 
 #[test]
 fn demo_writes_its_files_and_shows_the_linear_blend_shrinking() {
-    let d = tmp_dir("demo");
+    let d = tmp_dir("blend-demo");
     let out = ok(&["demo", "--out", s(&d)]);
     assert!(out.contains("volume / interpolated volume"), "{out}");
     for f in [
@@ -94,7 +59,7 @@ fn demo_writes_its_files_and_shows_the_linear_blend_shrinking() {
 
 #[test]
 fn blend_writes_frames_reports_and_refuses_bad_input() {
-    let d = tmp_dir("blend");
+    let d = tmp_dir("blend-blend");
     ok(&["demo", "--out", s(&d)]);
     let (base, target) = (d.join("base.obj"), d.join("target.obj"));
     // α = 0 gives the base back, α = 1 the target.

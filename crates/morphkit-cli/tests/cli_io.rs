@@ -1,40 +1,10 @@
 //! `morphkit info` and `morphkit convert`, run as the built binary.
 
+mod common;
+use common::*;
+use std::process::Command;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn tmp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("morphkit-cli-io-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn morphkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_morphkit"))
-        .args(args)
-        .output()
-        .expect("run morphkit")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = morphkit(args);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "morphkit {args:?} failed: {err}");
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn fails(args: &[&str]) -> String {
-    let out = morphkit(args);
-    assert!(!out.status.success(), "morphkit {args:?} should fail");
-    let err = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(err.starts_with("error: "), "{err}");
-    err
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 /// Writes a strip of `n` quads bent by `bend`, as OBJ.
 fn write_strip(path: &Path, n: usize, bend: f64) {
@@ -74,7 +44,7 @@ fn help_shows_examples() {
 
 #[test]
 fn info_text_and_json() {
-    let d = tmp_dir("info");
+    let d = tmp_dir("io-info");
     let f = frames(&d, 2);
     let text = ok(&["info", s(&f[0]), s(&f[1])]);
     assert!(text.contains("vertices               10"), "{text}");
@@ -100,7 +70,7 @@ fn info_text_and_json() {
 
 #[test]
 fn convert_single_meshes_between_formats() {
-    let d = tmp_dir("single");
+    let d = tmp_dir("io-single");
     let f = frames(&d, 1);
     let mut prev = f[0].clone();
     for ext in ["ply", "off", "glb", "gltf", "obj.gz", "obj"] {
@@ -116,7 +86,7 @@ fn convert_single_meshes_between_formats() {
 
 #[test]
 fn convert_sequences_to_animations_and_back() {
-    let d = tmp_dir("seq");
+    let d = tmp_dir("io-seq");
     let f = frames(&d, 5);
     // A glob pattern, a directory and a list of files.
     let pattern = format!("{}/seq/f*.obj", d.display());
@@ -173,7 +143,7 @@ fn convert_sequences_to_animations_and_back() {
 
 #[test]
 fn convert_errors_are_one_line() {
-    let d = tmp_dir("errors");
+    let d = tmp_dir("io-errors");
     let f = frames(&d, 2);
     let missing = d.join("missing.obj");
     let e = fails(&["convert", s(&missing), s(&d.join("x.ply"))]);

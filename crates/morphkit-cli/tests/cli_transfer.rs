@@ -1,41 +1,9 @@
 //! `morphkit correspond` and `morphkit transfer`, run as the built binary on generated tubes.
 
+mod common;
+use common::*;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn tmp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!(
-        "morphkit-cli-transfer-{name}-{}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn morphkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_morphkit"))
-        .args(args)
-        .output()
-        .expect("run morphkit")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = morphkit(args);
-    let err = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(out.status.success(), "morphkit {args:?} failed: {err}");
-    err
-}
-
-fn fails(args: &[&str]) -> String {
-    let out = morphkit(args);
-    assert!(!out.status.success(), "morphkit {args:?} should fail");
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 /// Writes an open tube (`nu` around, `nv` rings, scaled by `scale`), bent by `bend` radians
 /// over its height, as OBJ. `flip` reverses the first triangle (other connectivity).
@@ -105,7 +73,7 @@ fn setup(name: &str) -> (PathBuf, PathBuf, Vec<PathBuf>, PathBuf, PathBuf) {
 fn correspond_then_transfer_to_obj_frames_and_pc2() {
     let (d, src, frames, tgt, markers) = setup("ok");
     let corr = d.join("corr.json");
-    let err = ok(&[
+    let (_, err) = run_ok(&[
         "correspond",
         "--source",
         s(&src),

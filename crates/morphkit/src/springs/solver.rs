@@ -404,6 +404,16 @@ impl PhysicalBlend {
         }
     }
 
+    /// $g^\top s$ for a full-length `g` and a free-coordinate vector `s`.
+    fn free_dot(&self, g: &[f64], s: &[f64]) -> f64 {
+        let free = self
+            .dof_index
+            .iter()
+            .enumerate()
+            .filter(|(_, i)| **i != u32::MAX);
+        free.map(|(k, &i)| g[k] * s[i as usize]).sum()
+    }
+
     fn max_free_gradient(&self, g: &[f64]) -> f64 {
         g.iter()
             .zip(&self.dof_index)
@@ -444,13 +454,7 @@ impl PhysicalBlend {
                 }
             };
             // Armijo backtracking on the energy.
-            let slope: f64 = self
-                .dof_index
-                .iter()
-                .enumerate()
-                .filter(|(_, i)| **i != u32::MAX)
-                .map(|(k, &i)| g[k] * step[i as usize])
-                .sum();
+            let slope = self.free_dot(&g, &step);
             if slope >= 0.0 {
                 // Not a descent direction (round-off at convergence): fall back to steepest descent.
                 for (k, &i) in self.dof_index.iter().enumerate() {
@@ -459,13 +463,7 @@ impl PhysicalBlend {
                     }
                 }
             }
-            let slope: f64 = self
-                .dof_index
-                .iter()
-                .enumerate()
-                .filter(|(_, i)| **i != u32::MAX)
-                .map(|(k, &i)| g[k] * step[i as usize])
-                .sum();
+            let slope = self.free_dot(&g, &step);
             let mut t = 1.0;
             let mut accepted = false;
             for _ in 0..60 {
