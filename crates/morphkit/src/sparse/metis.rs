@@ -14,17 +14,26 @@ pub fn nested_dissection(adj: &[Vec<usize>]) -> Result<Vec<usize>, SolveError> {
     if n > i32::MAX as usize {
         return Err(SolveError::Backend("graph too large for METIS".into()));
     }
+    // METIS wants a symmetric graph without self-loops: store every edge both ways.
+    let mut sym: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for (v, list) in adj.iter().enumerate() {
+        for &w in list.iter().filter(|&&w| w != v && w < n) {
+            sym[v].push(w);
+            sym[w].push(v);
+        }
+    }
     let mut xadj: Vec<i32> = Vec::with_capacity(n + 1);
     let mut adjncy: Vec<i32> = Vec::new();
     xadj.push(0);
-    for (v, list) in adj.iter().enumerate() {
-        let mut l: Vec<usize> = list.iter().copied().filter(|&w| w != v && w < n).collect();
+    for mut l in sym {
         l.sort_unstable();
         l.dedup();
         adjncy.extend(l.into_iter().map(|w| w as i32));
+        if adjncy.len() > i32::MAX as usize {
+            return Err(SolveError::Backend("graph too large for METIS".into()));
+        }
         xadj.push(adjncy.len() as i32);
     }
-    // METIS wants a symmetric graph: make sure every edge is stored both ways.
     let mut nvtxs = n as i32;
     let mut options = [0i32; metis_sys::METIS_NOPTIONS as usize];
     let mut perm = vec![0i32; n];

@@ -28,7 +28,7 @@ pub mod metrics;
 mod pcg;
 mod solver;
 mod spring_set;
-mod weights;
+pub mod weights;
 
 pub use constraints::{Constraints, FixedVertices};
 pub use metrics::{blend_metrics, linear_blend, BlendMetrics};
@@ -48,6 +48,16 @@ pub enum BlendError {
         index: usize,
         /// Its value.
         value: f64,
+    },
+    /// A weight is larger in magnitude than [`weights::MAX_WEIGHT`].
+    #[error("weight {index} is {value}; weights are limited to ±{max}")]
+    WeightOutOfRange {
+        /// Position of the weight.
+        index: usize,
+        /// Its value.
+        value: f64,
+        /// The bound.
+        max: f64,
     },
     /// The number of weights does not fit the number of shapes.
     #[error("{kind} weights: {found} given, {expected} expected for {shapes} shapes")]

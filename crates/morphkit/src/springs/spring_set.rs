@@ -69,6 +69,7 @@ pub struct SpringSet {
     /// Stiffness multiplier per spring (`k0`, times `bending_scale` for bending springs).
     scale: Vec<f64>,
     options: SpringOptions,
+    dropped: usize,
 }
 
 impl SpringSet {
@@ -95,11 +96,26 @@ impl SpringSet {
                 }
             }
         }
-        let rest = shapes
+        let mut rest: Vec<Vec<f64>> = shapes
             .all_positions()
             .iter()
             .map(|p| lengths(&springs, p))
             .collect();
+        // A spring between coincident vertices in every shape (UV seams that meet at a pole,
+        // say) would get stiffness k0 / 0: it is left out, and counted.
+        let eps = 1e-12 * crate::mesh::bbox_diagonal(shapes.positions(0)).max(f64::MIN_POSITIVE);
+        let keep: Vec<bool> = (0..springs.len())
+            .map(|q| rest.iter().any(|r| r[q] > eps))
+            .collect();
+        let dropped = keep.iter().filter(|k| !**k).count();
+        if dropped > 0 {
+            let mut it = keep.iter();
+            springs.retain(|_| *it.next().unwrap_or(&true));
+            for r in &mut rest {
+                let mut it = keep.iter();
+                r.retain(|_| *it.next().unwrap_or(&true));
+            }
+        }
         let scale = springs
             .iter()
             .map(|s| match s.kind {
@@ -112,7 +128,13 @@ impl SpringSet {
             rest,
             scale,
             options: options.clone(),
+            dropped,
         }
+    }
+
+    /// Springs left out because their two vertices coincide in every shape.
+    pub fn dropped_zero_length(&self) -> usize {
+        self.dropped
     }
 
     /// The springs.
@@ -162,4 +184,30 @@ fn lengths(springs: &[Spring], p: &[Point]) -> Vec<f64> {
         .iter()
         .map(|s| norm(sub(p[s.i as usize], p[s.j as usize])))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::TriMesh;
+
+    #[test]
+    fn springs_between_coincident_vertices_are_left_out() {
+        // Two triangles meeting at vertex 2; vertex 4 sits exactly on vertex 0 (a UV seam).
+        let p = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.5, 1.0, 0.0],
+            [1.0, 2.0, 0.0],
+            [0.0, 0.0, 0.0],
+        ];
+        let m = TriMesh::new(p.clone(), vec![[0, 1, 2], [2, 3, 4]]);
+        let set = ShapeSet::new(m.clone(), vec![("a".into(), p.clone()), ("b".into(), p)]).unwrap();
+        let topo = Topology::new(5, &m.triangles);
+        let s = SpringSet::new(&set, &topo, &SpringOptions::default());
+        assert_eq!(s.dropped_zero_length(), 1);
+        assert!(s.springs().iter().all(|q| !(q.i == 0 && q.j == 4)));
+        assert!(s.rest_lengths(0).iter().all(|&r| r > 0.0));
+        assert_eq!(s.rest_lengths(1).len(), s.len());
+    }
 }

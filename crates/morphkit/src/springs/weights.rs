@@ -16,8 +16,14 @@ pub enum Weights {
     Delta(Vec<f64>),
 }
 
+/// Largest magnitude accepted for any single weight. Weights far outside `[0, 1]` are
+/// extrapolations that no spring system follows meaningfully, and the continuation would need
+/// thousands of sub-steps to reach them.
+pub const MAX_WEIGHT: f64 = 100.0;
+
 impl Weights {
-    /// The equivalent affine coefficients `c` over all `n` shapes (`Σ c = 1`), validated.
+    /// The equivalent affine coefficients `c` over all `n` shapes (`Σ c = 1`), validated:
+    /// finite, at most [`MAX_WEIGHT`] in magnitude, and the right count for the form.
     pub fn coefficients(&self, n: usize) -> Result<Vec<f64>, BlendError> {
         let check = |w: &[f64]| -> Result<(), BlendError> {
             match w.iter().position(|x| !x.is_finite()) {
