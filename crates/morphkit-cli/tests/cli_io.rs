@@ -168,3 +168,46 @@ fn convert_errors_are_one_line() {
     assert!(e.contains("is a directory"), "{e}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn output_directory_that_is_the_input_directory_is_refused() {
+    let d = tmp_dir("io-same-dir");
+    let f = frames(&d, 3);
+    let seq = d.join("seq");
+    let before: Vec<Vec<u8>> = f.iter().map(|p| std::fs::read(p).unwrap()).collect();
+    let e = fails(&["convert", s(&seq), s(&seq)]);
+    assert!(e.contains("refusing to overwrite"), "{e}");
+    let e = fails(&[
+        "transfer",
+        "--source-ref",
+        s(&f[0]),
+        "--source",
+        s(&seq),
+        "--target",
+        s(&f[1]),
+        "--markers",
+        s(&d.join("m.json")),
+        "--out",
+        s(&seq),
+    ]);
+    assert!(e.contains("refusing to overwrite"), "{e}");
+    let after: Vec<Vec<u8>> = f.iter().map(|p| std::fs::read(p).unwrap()).collect();
+    assert_eq!(before, after);
+    assert_eq!(std::fs::read_dir(&seq).unwrap().count(), 3);
+}
+
+#[test]
+fn convert_into_a_frame_directory_drops_stale_frames() {
+    let d = tmp_dir("io-stale");
+    let f = frames(&d, 4);
+    let out = d.join("out");
+    ok(&["convert", s(&d.join("seq")), s(&out)]);
+    assert!(out.join("frame_0003.obj").exists());
+    ok(&["convert", s(&f[0]), s(&f[1]), s(&out)]);
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["frame_0000.obj", "frame_0001.obj"]);
+}

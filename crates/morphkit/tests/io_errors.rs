@@ -143,9 +143,10 @@ fn nan_coordinates() {
     read_err(&p, &[":2:", "non-finite coordinate 'NaN'"]);
     // Binary PLY: caught by validation, naming the vertex.
     let mut m = quad();
-    m.positions[2][1] = f64::NAN;
+    m.positions[2][1] = 0.8125;
     let p = d.join("n.ply");
-    io::write_mesh(&p, &m).unwrap();
+    io::write_mesh(&p, &m).unwrap(); // writers refuse NaN: patch it in afterwards
+    patch_bytes(&p, &0.8125f64.to_le_bytes(), &f64::NAN.to_le_bytes());
     let e = read_err(&p, &["vertex 2", "non-finite"]);
     assert!(matches!(e, IoError::InvalidMesh { .. }));
     let _ = std::fs::remove_dir_all(&d);
@@ -303,5 +304,201 @@ fn unknown_extensions_and_bad_pc2() {
         e.contains("a.pc2") && e.contains("at byte") && e.contains("header"),
         "{e}"
     );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn write_frames_refuses_its_own_input_directory() {
+    let d = tmp_dir("own-dir");
+    let set = ShapeSet::from_meshes(vec![("q".into(), quad())]).unwrap();
+    let opts = FramesOptions {
+        inputs: vec![d.clone()],
+        ..FramesOptions::default()
+    };
+    let e = io::write_frames(&d, &set, &opts).unwrap_err();
+    assert!(matches!(e, IoError::WouldOverwriteInput { .. }), "{e}");
+    assert!(!d.join("frame_0000.obj").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+fn dir_names(d: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn frame_directory_removes_stale_frames_and_keeps_old_ones_on_failure() {
+    let root = tmp_dir("frames-safe");
+    let d = root.join("out");
+    std::fs::create_dir_all(&d).unwrap();
+    let q = quad();
+    let five: Vec<(String, Vec<[f64; 3]>)> = (0..5)
+        .map(|k| (format!("s{k}"), q.positions.clone()))
+        .collect();
+    let set5 = ShapeSet::new(q.clone(), five).unwrap();
+    std::fs::write(d.join("notes.txt"), "keep").unwrap();
+    io::write_frames(&d, &set5, &FramesOptions::default()).unwrap();
+    assert_eq!(dir_names(&d).len(), 6);
+    // A shorter run leaves no stale higher-numbered frames behind.
+    let set2 =
+        ShapeSet::from_meshes(vec![("a".into(), q.clone()), ("b".into(), q.clone())]).unwrap();
+    io::write_frames(&d, &set2, &FramesOptions::default()).unwrap();
+    assert_eq!(
+        dir_names(&d),
+        ["frame_0000.obj", "frame_0001.obj", "notes.txt"]
+    );
+    // A failing later frame changes and deletes nothing that existed before.
+    let before0 = std::fs::read(d.join("frame_0000.obj")).unwrap();
+    let mut moved = q.positions.clone();
+    moved[0] = [9.0, 9.0, 9.0];
+    let mut bad = q.positions.clone();
+    bad[2] = [f64::NAN, 0.0, 0.0];
+    let set3 = ShapeSet::new(
+        q.clone(),
+        vec![
+            ("a".into(), moved),
+            ("b".into(), bad),
+            ("c".into(), q.positions.clone()),
+        ],
+    )
+    .unwrap();
+    let e = io::write_frames(&d, &set3, &FramesOptions::default()).unwrap_err();
+    let s = e.to_string();
+    assert!(
+        s.contains("frame_0001.obj") && s.contains("vertex 2"),
+        "{s}"
+    );
+    assert_eq!(std::fs::read(d.join("frame_0000.obj")).unwrap(), before0);
+    assert_eq!(
+        dir_names(&d),
+        ["frame_0000.obj", "frame_0001.obj", "notes.txt"]
+    );
+    assert_eq!(dir_names(&root), ["out"], "no temporary directory is left");
+    // A new directory that fails is not created at all.
+    let e = io::write_frames(&root.join("fresh"), &set3, &FramesOptions::default());
+    assert!(e.is_err());
+    assert_eq!(dir_names(&root), ["out"]);
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+#[test]
+fn ply_huge_counts_and_propertyless_binary_elements_are_errors() {
+    let d = tmp_dir("ply-huge");
+    let p = d.join("huge.ply");
+    std::fs::write(
+        &p,
+        "ply\nformat binary_little_endian 1.0\nelement vertex 100000000000000000\n\
+         property float x\nproperty float y\nproperty float z\nend_header\n\0\0\0\0",
+    )
+    .unwrap();
+    read_err(&p, &["vertex"]);
+    let p = d.join("faces.ply");
+    std::fs::write(
+        &p,
+        format!(
+            "ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\n\
+             property float y\nproperty float z\nelement face {}\n\
+             property list uchar int vertex_indices\nend_header\n\x03",
+            usize::MAX
+        ),
+    )
+    .unwrap();
+    read_err(&p, &["face"]);
+    let p = d.join("empty-el.ply");
+    std::fs::write(
+        &p,
+        format!(
+            "ply\nformat binary_little_endian 1.0\nelement junk {}\nelement vertex 0\n\
+             property float x\nproperty float y\nproperty float z\nend_header\n",
+            u64::MAX
+        ),
+    )
+    .unwrap();
+    read_err(&p, &["'junk'", "no properties"]);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn pc2_with_zero_points_and_many_samples_is_an_error() {
+    let d = tmp_dir("pc2-zero");
+    let p = d.join("z.pc2");
+    let mut b = b"POINTCACHE2\0".to_vec();
+    b.extend(1i32.to_le_bytes());
+    b.extend(0i32.to_le_bytes());
+    b.extend(0f32.to_le_bytes());
+    b.extend(1f32.to_le_bytes());
+    b.extend(i32::MAX.to_le_bytes());
+    std::fs::write(&p, &b).unwrap();
+    let e = io::pc2::parse_pc2(&p, &b).unwrap_err().to_string();
+    assert!(e.contains("z.pc2") && e.contains("0 points"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Replaces the first occurrence of `from` in the file with `to`.
+fn patch_bytes(path: &Path, from: &[u8], to: &[u8]) {
+    let mut b = std::fs::read(path).unwrap();
+    let i = b
+        .windows(from.len())
+        .position(|w| w == from)
+        .expect("pattern present");
+    b[i..i + to.len()].copy_from_slice(to);
+    std::fs::write(path, b).unwrap();
+}
+
+#[test]
+fn gltf_non_finite_displacements_and_weights_name_the_index() {
+    let d = tmp_dir("gltf-nan");
+    let q = quad();
+    let mut t1 = q.positions.clone();
+    t1[3][2] = 1234.5;
+    let rig = GltfMorphs {
+        base: q.clone(),
+        target_names: vec!["a".into(), "b".into()],
+        targets: vec![q.positions.clone(), t1],
+        weight_keys: vec![(0.0, vec![1.0, 0.0]), (1.0, vec![0.0, 0.625])],
+    };
+    let p = d.join("disp.glb");
+    io::write_gltf_morphs(&p, &rig).unwrap();
+    patch_bytes(&p, &1234.5f32.to_le_bytes(), &f32::NAN.to_le_bytes());
+    let e = io::read_gltf_morphs(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("disp.glb") && e.contains("morph target 1") && e.contains("vertex 3"),
+        "{e}"
+    );
+    let p = d.join("weight.glb");
+    io::write_gltf_morphs(&p, &rig).unwrap();
+    patch_bytes(&p, &0.625f32.to_le_bytes(), &f32::INFINITY.to_le_bytes());
+    let e = io::read_gltf_morphs(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("weight.glb") && e.contains("key 1") && e.contains("target 1"),
+        "{e}"
+    );
+    let e = io::read_animation(&p, None).unwrap_err().to_string();
+    assert!(e.contains("key 1"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn writers_refuse_non_finite_coordinates() {
+    let d = tmp_dir("write-nan");
+    let mut m = quad();
+    m.positions[2][1] = f64::INFINITY;
+    for name in ["m.obj", "m.obj.gz", "m.ply", "m.off"] {
+        let p = d.join(name);
+        let e = io::write_mesh(&p, &m).unwrap_err().to_string();
+        assert!(e.contains(name) && e.contains("vertex 2"), "{e}");
+        assert!(!p.exists());
+    }
+    let colors = io::Colors::PerVertex(vec![[0, 0, 0]; 4]);
+    let p = d.join("c.ply");
+    let e = io::write_ply_colored(&p, &m, &colors)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("vertex 2"), "{e}");
+    assert_eq!(dir_names(&d).len(), 0);
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -35,10 +35,23 @@ pub struct ConvertArgs {
     pub reference: Option<PathBuf>,
 }
 
-/// Expands glob patterns (an argument with `*`, `?` or `[` that is not an existing path),
-/// sorted by name.
-fn expand(args: &[String]) -> anyhow::Result<Vec<PathBuf>> {
-    let mut out = Vec::new();
+/// Input arguments after expansion (see [`expand`]).
+pub(crate) struct Inputs {
+    /// The files to read, in order: globs and directories replaced by their files.
+    pub files: Vec<PathBuf>,
+    /// Every path the output must not overwrite: the files and the directories they came from.
+    pub protected: Vec<PathBuf>,
+    /// True when the arguments were exactly one directory (a frame sequence).
+    pub single_dir: bool,
+}
+
+/// Expands input arguments: a glob pattern (an argument with `*`, `?` or `[` that is not an
+/// existing path) becomes its matching files sorted by name, a directory its OBJ frames
+/// ([`io::obj_files`]), anything else stays as given.
+pub(crate) fn expand(args: &[String]) -> anyhow::Result<Inputs> {
+    let mut files = Vec::new();
+    let mut protected = Vec::new();
+    let mut dirs = 0;
     for a in args {
         let p = PathBuf::from(a);
         if !p.exists() && a.contains(['*', '?', '[']) {
@@ -51,29 +64,21 @@ fn expand(args: &[String]) -> anyhow::Result<Vec<PathBuf>> {
                 bail!("no files match '{a}'");
             }
             matches.sort();
-            out.extend(matches);
+            files.extend(matches);
+        } else if p.is_dir() {
+            dirs += 1;
+            files.extend(io::obj_files(&p)?);
+            protected.push(p);
         } else {
-            out.push(p);
+            files.push(p);
         }
     }
-    Ok(out)
-}
-
-/// The OBJ frames of a directory, sorted by name.
-fn dir_frames(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| format!("{}: cannot list the directory", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_file() && matches!(Format::from_path(p), Some(Format::Obj { .. })))
-        .collect();
-    if files.is_empty() {
-        bail!(
-            "{}: the directory holds no .obj or .obj.gz files",
-            dir.display()
-        );
-    }
-    files.sort();
-    Ok(files)
+    protected.extend(files.iter().cloned());
+    Ok(Inputs {
+        files,
+        protected,
+        single_dir: args.len() == 1 && dirs == 1,
+    })
 }
 
 /// True when the output receives an animation rather than one mesh.
@@ -111,12 +116,11 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         _ => bail!("give at least one input and an output (morphkit convert IN... OUT)"),
     };
     let out = PathBuf::from(out);
-    let mut inputs = expand(ins)?;
-    let single_dir = inputs.len() == 1 && inputs[0].is_dir();
-    let mut protected = inputs.clone();
-    if single_dir {
-        protected.extend(dir_frames(&inputs[0])?);
-    }
+    let Inputs {
+        files: inputs,
+        mut protected,
+        single_dir,
+    } = expand(ins)?;
     protected.extend(args.reference.iter().cloned());
     io::check_not_input(&out, &protected)?;
     let opts = FramesOptions {
@@ -130,9 +134,6 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
                 "{}: a sequence converts to an animation: give a directory, .glb, .gltf or .pc2 output",
                 out.display()
             );
-        }
-        if single_dir {
-            inputs = dir_frames(&inputs[0])?;
         }
         let frames = read_sequence(&inputs)?;
         return write_frames(&out, &frames, &opts);

@@ -77,29 +77,6 @@ pub struct TransferArgs {
     pub fps: f64,
 }
 
-/// Expands quoted glob patterns, sorted by name.
-fn expand(args: &[String]) -> anyhow::Result<Vec<PathBuf>> {
-    let mut out = Vec::new();
-    for a in args {
-        let p = PathBuf::from(a);
-        if !p.exists() && a.contains(['*', '?', '[']) {
-            let mut m: Vec<PathBuf> = glob::glob(a)
-                .with_context(|| format!("invalid glob pattern '{a}'"))?
-                .filter_map(Result::ok)
-                .filter(|p| p.is_file())
-                .collect();
-            if m.is_empty() {
-                bail!("no files match '{a}'");
-            }
-            m.sort();
-            out.extend(m);
-        } else {
-            out.push(p);
-        }
-    }
-    Ok(out)
-}
-
 /// Reads the source frames in any of the accepted forms.
 fn read_frames(paths: &[PathBuf], source_ref: &Path) -> anyhow::Result<ShapeSet> {
     if let [one] = paths {
@@ -145,8 +122,9 @@ fn options(args: &TransferArgs) -> anyhow::Result<TransferOptions> {
 /// Runs `morphkit transfer`.
 pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
     let opts = options(args)?;
-    let frame_paths = expand(&args.source)?;
-    let mut inputs = frame_paths.clone();
+    let expanded = super::convert::expand(&args.source)?;
+    let frame_paths = expanded.files;
+    let mut inputs = expanded.protected;
     inputs.extend([args.source_ref.clone(), args.target.clone()]);
     inputs.extend(args.markers.iter().cloned());
     inputs.extend(args.correspondence.iter().cloned());
@@ -232,11 +210,14 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
     for i in 0..frames.len() {
         let f = frames.positions(i);
         let t1 = Instant::now();
-        let g = tr.target_gradients(&tr.source_gradients(f)?);
+        let g = tr.target_gradients(
+            &tr.source_gradients_at(i, f)
+                .with_context(|| format!("source frame {i} ({})", frames.name(i)))?,
+        );
         let t2 = Instant::now();
         let x = tr
             .solve_gradients(&g, Some(f))
-            .with_context(|| format!("frame {i} ({})", frames.name(i)))?;
+            .with_context(|| format!("source frame {i} ({})", frames.name(i)))?;
         let solve = t2.elapsed().as_secs_f64();
         grad_total += (t2 - t1).as_secs_f64();
         solve_total += solve;

@@ -68,6 +68,41 @@ pub(crate) fn write_atomic_with(
     Ok(())
 }
 
+/// A fresh, unused path next to `path` (same directory, so a rename into place stays on one
+/// file system): `.NAME.PID-N.SUFFIX`.
+pub(crate) fn temp_sibling(path: &Path, suffix: &str) -> PathBuf {
+    let name = path
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    dir.join(format!(
+        ".{name}.{}-{}.{suffix}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ))
+}
+
+/// Fails with an [`IoError::Content`] error naming the first vertex of `positions` with a NaN
+/// or infinite coordinate: writers refuse to store such values.
+pub(crate) fn check_finite(path: &Path, positions: &[[f64; 3]]) -> Result<(), IoError> {
+    match positions
+        .iter()
+        .position(|p| p.iter().any(|x| !x.is_finite()))
+    {
+        Some(v) => Err(IoError::content(
+            path,
+            format!(
+                "vertex {v} has a non-finite coordinate {:?}; refusing to write it",
+                positions[v]
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Canonical form of a path that may not exist yet: its existing parent canonicalized, plus
 /// the file name.
 fn canonical(path: &Path) -> PathBuf {
@@ -88,16 +123,17 @@ fn canonical(path: &Path) -> PathBuf {
 }
 
 /// Fails with [`IoError::WouldOverwriteInput`] when `out` is one of `inputs` (compared after
-/// canonicalization, so `./a.obj` and `a.obj` or a symlink are the same file), or when `out` is
-/// an existing directory that directly holds one of the inputs (frame directories are written
-/// into, and a frame file could replace an input).
+/// canonicalization, so `./a.obj` and `a.obj` or a symlink are the same file; this includes an
+/// output directory that is itself an input directory), or when `out` is an existing directory
+/// that directly holds one of the inputs (frame directories are written into, and a frame file
+/// could replace an input).
 pub fn check_not_input(out: &Path, inputs: &[PathBuf]) -> Result<(), IoError> {
     let out_c = canonical(out);
     let out_is_dir = out.is_dir();
     for input in inputs {
         let in_c = canonical(input);
         let inside = out_is_dir && in_c.parent() == Some(out_c.as_path()) && !in_c.is_dir();
-        if in_c == out_c && !out_is_dir || inside {
+        if in_c == out_c || inside {
             return Err(IoError::WouldOverwriteInput {
                 path: out.to_path_buf(),
                 input: input.clone(),
@@ -149,6 +185,19 @@ mod tests {
         assert!(check_not_input(&dotted, std::slice::from_ref(&a)).is_err());
         assert!(check_not_input(&d, std::slice::from_ref(&a)).is_err());
         assert!(check_not_input(&d.join("b.obj"), &[a]).is_ok());
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn refuses_an_output_directory_that_is_an_input_directory() {
+        let d = tmp_dir("same-dir");
+        let e = check_not_input(&d, std::slice::from_ref(&d)).unwrap_err();
+        assert!(matches!(e, IoError::WouldOverwriteInput { .. }), "{e}");
+        let dotted = d.join(".");
+        assert!(check_not_input(&dotted, std::slice::from_ref(&d)).is_err());
+        let other = d.join("sub");
+        std::fs::create_dir_all(&other).unwrap();
+        assert!(check_not_input(&other, std::slice::from_ref(&d)).is_ok());
         let _ = std::fs::remove_dir_all(&d);
     }
 }

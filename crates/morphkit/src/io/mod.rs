@@ -32,7 +32,7 @@ pub use format::Format;
 pub use gltf::{read_gltf_morphs, write_gltf_morphs, GltfMorphs};
 pub use ply::{write_ply_colored, PlyEncoding};
 pub use sequence::{
-    frames_to_gltf, gltf_to_frames, read_animation, read_shape_set, read_shape_set_with,
+    frames_to_gltf, gltf_to_frames, obj_files, read_animation, read_shape_set, read_shape_set_with,
     write_frames, write_frames_with, FramesOptions,
 };
 

@@ -155,8 +155,10 @@ pub fn write_obj_to(w: &mut dyn Write, mesh: &TriMesh) -> std::io::Result<()> {
     Ok(())
 }
 
-/// Writes `mesh` as OBJ to `path` atomically; gzip-compressed when `gzip`.
+/// Writes `mesh` as OBJ to `path` atomically; gzip-compressed when `gzip`. A NaN or infinite
+/// coordinate is an [`IoError::Content`] error naming the vertex, and nothing is written.
 pub fn write_obj(path: &Path, mesh: &TriMesh, gzip: bool) -> Result<(), IoError> {
+    super::atomic::check_finite(path, &mesh.positions)?;
     super::atomic::write_atomic_with(path, |w| {
         if gzip {
             let mut gz = flate2::write::GzEncoder::new(w, flate2::Compression::default());

@@ -151,8 +151,10 @@ pub fn write_off_to(w: &mut dyn Write, mesh: &TriMesh) -> std::io::Result<()> {
     Ok(())
 }
 
-/// Writes `mesh` as OFF to `path` atomically.
+/// Writes `mesh` as OFF to `path` atomically. A NaN or infinite coordinate is an
+/// [`IoError::Content`] error naming the vertex, and nothing is written.
 pub fn write_off(path: &Path, mesh: &TriMesh) -> Result<(), IoError> {
+    super::atomic::check_finite(path, &mesh.positions)?;
     super::atomic::write_atomic_with(path, |w| write_off_to(w, mesh))
 }
 

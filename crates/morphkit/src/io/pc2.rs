@@ -66,6 +66,13 @@ pub fn parse_pc2(path: &Path, b: &[u8]) -> Result<PointCache, IoError> {
         ));
     }
     let (np, ns) = (np as usize, ns as usize);
+    if np == 0 && ns > 0 {
+        return Err(IoError::binary(
+            path,
+            16,
+            format!("the header promises {ns} samples of 0 points"),
+        ));
+    }
     let need = HEADER as u64 + 12 * np as u64 * ns as u64;
     if (b.len() as u64) < need {
         let full = (b.len() - HEADER) / (12 * np.max(1));
@@ -78,9 +85,12 @@ pub fn parse_pc2(path: &Path, b: &[u8]) -> Result<PointCache, IoError> {
             ),
         ));
     }
-    let mut samples = Vec::with_capacity(ns);
+    // The length check above bounds `ns * np` by the file size; cap anyway so that no header
+    // can make a reservation larger than the file could fill.
+    let room = (b.len() - HEADER) / 12;
+    let mut samples = Vec::with_capacity(ns.min(room));
     for s in 0..ns {
-        let mut pts = Vec::with_capacity(np);
+        let mut pts = Vec::with_capacity(np.min(room));
         for p in 0..np {
             let o = HEADER + 12 * (s * np + p);
             let q = [

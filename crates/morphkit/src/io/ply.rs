@@ -256,6 +256,14 @@ impl<'a> Values<'a, '_> {
         }
     }
 
+    /// An upper bound on the bytes left to read (caps reservations driven by header counts).
+    fn remaining(&self, total: usize) -> usize {
+        match &*self.body {
+            Body::Binary { data, pos, .. } => data.len().saturating_sub(*pos),
+            Body::Ascii { .. } => total,
+        }
+    }
+
     /// Starts an element instance: for ascii, moves to the next non-empty line.
     fn start(&mut self, path: &Path, what: &dyn Fn() -> String) -> Result<(), IoError> {
         if let Body::Ascii { lines, first_line } = &mut *self.body {
@@ -310,6 +318,18 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
     };
     let mut saw_vertex = false;
     for el in &h.elements {
+        if h.encoding != PlyEncoding::Ascii && el.count > 0 && el.props.is_empty() {
+            return Err(IoError::content(
+                path,
+                format!(
+                    "binary element '{}' has {} instances but no properties",
+                    el.name, el.count
+                ),
+            ));
+        }
+        // Every instance takes at least one byte, so no element can hold more instances than
+        // bytes are left: reservations never exceed what the file could fill.
+        let room = vals.remaining(body_bytes.len());
         let is_vertex = el.name == "vertex";
         let is_face = el.name == "face";
         let coord = |n: &str| el.props.iter().position(|p| p.name == n);
@@ -322,7 +342,7 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
                     "the vertex element lacks an x, y or z property",
                 ));
             }
-            positions.reserve(el.count);
+            positions.reserve(el.count.min(room));
             idx.map(|i| i.unwrap_or(usize::MAX))
         } else {
             [usize::MAX; 3]
@@ -341,7 +361,9 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
                         "the face element has no 'vertex_indices' or 'vertex_index' list",
                     )
                 })?;
-            polys.indices.reserve(3 * el.count);
+            polys
+                .indices
+                .reserve(el.count.checked_mul(3).unwrap_or(usize::MAX).min(room));
             Some(p)
         } else {
             None
@@ -412,18 +434,22 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
     Ok(TriMesh::from_polygons(positions, polys))
 }
 
-/// Writes `mesh` as PLY in the given encoding (polygons when present), atomically.
+/// Writes `mesh` as PLY in the given encoding (polygons when present), atomically. A NaN or
+/// infinite coordinate is an [`IoError::Content`] error naming the vertex, and nothing is written.
 pub fn write_ply(path: &Path, mesh: &TriMesh, encoding: PlyEncoding) -> Result<(), IoError> {
+    super::atomic::check_finite(path, &mesh.positions)?;
     let faces = faces_of(mesh);
     super::atomic::write_atomic_with(path, |w| write_ply_to(w, mesh, &faces, encoding, None))
 }
 
-/// Writes `mesh` as binary little-endian PLY with colours, atomically.
+/// Writes `mesh` as binary little-endian PLY with colours, atomically. Non-finite coordinates
+/// are refused as in [`write_ply`].
 ///
 /// [`Colors::PerVertex`] needs one colour per vertex. [`Colors::PerFace`] needs one colour
 /// per triangle (the triangles are written) or, for a mesh with polygons, one per polygon (the
 /// polygons are written); any other length is an [`IoError::Content`] error.
 pub fn write_ply_colored(path: &Path, mesh: &TriMesh, colors: &Colors) -> Result<(), IoError> {
+    super::atomic::check_finite(path, &mesh.positions)?;
     let faces = match colors {
         Colors::PerVertex(c) if c.len() == mesh.num_vertices() => faces_of(mesh),
         Colors::PerFace(c) if c.len() == mesh.num_triangles() => triangles_as_polygons(mesh),

@@ -1,6 +1,7 @@
 //! Shape sets and animations made of several meshes: reading frame sequences and rigs, writing
 //! numbered OBJ frames, glTF morph animations and PC2 caches.
 
+use super::atomic::temp_sibling;
 use super::format::Format;
 use super::gltf::{read_gltf_morphs, write_gltf_morphs, GltfMorphs};
 use super::pc2::{parse_pc2, write_pc2, PointCache};
@@ -74,8 +75,9 @@ pub fn read_shape_set_with(
     Ok(set)
 }
 
-/// The `.obj` and `.obj.gz` files of a directory, sorted by name.
-fn obj_files(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
+/// The `.obj` and `.obj.gz` files of a directory, sorted by name: the frames a directory
+/// argument stands for. An empty list is an [`IoError::Content`] error naming the directory.
+pub fn obj_files(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
     let entries = std::fs::read_dir(dir).map_err(|e| IoError::os(dir, "list the directory", e))?;
     let mut files = Vec::new();
     for e in entries {
@@ -206,8 +208,12 @@ pub fn write_frames(out: &Path, frames: &ShapeSet, opts: &FramesOptions) -> Resu
 
 /// Writes `frames` to `out`, calling `on_frame(i)` after each OBJ frame file:
 /// - a directory (existing, or a path without extension, created): `frame_0000.obj`, … one
-///   per shape; a failure removes the frames written by this call (and the directory if this
-///   call created it);
+///   per shape. All frames are first written into a fresh temporary sibling directory
+///   (`.NAME.PID-N.frames.tmp`); only when every frame succeeded are they moved into `out`
+///   (a new `out` is the renamed temporary directory), and `frame_*.obj` files left in `out`
+///   by an earlier, longer sequence are then removed. Other files in `out` are never touched.
+///   A failure while writing removes only the temporary directory: no file that existed before
+///   the call is changed or deleted;
 /// - `.glb` / `.gltf`: [`frames_to_gltf`] at `opts.fps`;
 /// - `.pc2`: one sample per shape, start frame 0, one frame per sample.
 ///
@@ -227,27 +233,7 @@ pub fn write_frames_with(
         ));
     }
     if is_frame_dir(out) {
-        let created = !out.exists();
-        if created {
-            std::fs::create_dir_all(out)
-                .map_err(|e| IoError::os(out, "create the directory", e))?;
-        }
-        let mut written = Vec::with_capacity(frames.len());
-        for i in 0..frames.len() {
-            let p = out.join(format!("frame_{i:04}.obj"));
-            if let Err(e) = obj::write_obj(&p, &frames.mesh(i), false) {
-                for w in &written {
-                    let _ = std::fs::remove_file(w);
-                }
-                if created {
-                    let _ = std::fs::remove_dir(out);
-                }
-                return Err(e);
-            }
-            written.push(p);
-            on_frame(i);
-        }
-        return Ok(());
+        return write_frame_dir(out, frames, &mut on_frame);
     }
     match Format::from_path(out) {
         Some(Format::Glb | Format::Gltf) => {
@@ -266,4 +252,75 @@ pub fn write_frames_with(
             expected: "a directory, .glb, .gltf or .pc2 for an animation",
         }),
     }
+}
+
+/// True for the names [`write_frames_with`] gives frames: `frame_*.obj`.
+fn is_frame_name(name: &str) -> bool {
+    name.starts_with("frame_") && name.ends_with(".obj")
+}
+
+/// The directory case of [`write_frames_with`].
+fn write_frame_dir(
+    out: &Path,
+    frames: &ShapeSet,
+    on_frame: &mut dyn FnMut(usize),
+) -> Result<(), IoError> {
+    let existed = out.exists();
+    if !existed {
+        if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent)
+                .map_err(|e| IoError::os(out, "create the parent directory", e))?;
+        }
+    }
+    let tmp = temp_sibling(out, "frames.tmp");
+    std::fs::create_dir(&tmp)
+        .map_err(|e| IoError::os(out, "create a temporary directory next to it", e))?;
+    let names: Vec<String> = (0..frames.len())
+        .map(|i| format!("frame_{i:04}.obj"))
+        .collect();
+    for (i, name) in names.iter().enumerate() {
+        if let Err(e) = obj::write_obj(&tmp.join(name), &frames.mesh(i), false) {
+            let _ = std::fs::remove_dir_all(&tmp);
+            return Err(match e {
+                // Name the destination frame, not the temporary file.
+                IoError::Content { message, .. } => IoError::content(&out.join(name), message),
+                e => e,
+            });
+        }
+        on_frame(i);
+    }
+    if !existed {
+        return std::fs::rename(&tmp, out).map_err(|e| {
+            let _ = std::fs::remove_dir_all(&tmp);
+            IoError::os(out, "move the finished frames into place", e)
+        });
+    }
+    // Stale frames of an earlier, longer sequence: listed before anything is moved.
+    let listed = std::fs::read_dir(out).map_err(|e| {
+        let _ = std::fs::remove_dir_all(&tmp);
+        IoError::os(out, "list the directory", e)
+    })?;
+    let stale: Vec<PathBuf> = listed
+        .filter_map(|e| e.ok())
+        .filter(|e| {
+            let n = e.file_name().to_string_lossy().into_owned();
+            is_frame_name(&n) && !names.contains(&n) && e.path().is_file()
+        })
+        .map(|e| e.path())
+        .collect();
+    for name in &names {
+        if let Err(e) = std::fs::rename(tmp.join(name), out.join(name)) {
+            let _ = std::fs::remove_dir_all(&tmp);
+            return Err(IoError::os(
+                &out.join(name),
+                "move the finished frame into place",
+                e,
+            ));
+        }
+    }
+    let _ = std::fs::remove_dir(&tmp);
+    for p in stale {
+        std::fs::remove_file(&p).map_err(|e| IoError::os(&p, "remove a stale frame", e))?;
+    }
+    Ok(())
 }

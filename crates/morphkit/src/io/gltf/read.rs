@@ -206,6 +206,12 @@ pub fn read_gltf_morphs(path: &Path) -> Result<GltfMorphs, IoError> {
                     d.len()
                 )));
             }
+            if let Some(v) = d.iter().position(|q| q.iter().any(|x| !x.is_finite())) {
+                return Err(at(format!(
+                    "morph target {t}: vertex {v} has a non-finite displacement {:?}",
+                    d[v]
+                )));
+            }
             displacements[t].extend(d.iter().map(|q| q.map(f64::from)));
         }
         positions.extend(p.iter().map(|q| q.map(f64::from)));
@@ -303,11 +309,25 @@ fn weight_keys<'a, 's>(
                     num_targets
                 )));
             }
+            if let Some(k) = times.iter().position(|t| !t.is_finite()) {
+                return Err(at(format!("key {k} has a non-finite time {}", times[k])));
+            }
             let skip = if per_key > num_targets {
                 num_targets
             } else {
                 0
             };
+            for (k, c) in w.chunks_exact(per_key).enumerate() {
+                if let Some(t) = c[skip..skip + num_targets]
+                    .iter()
+                    .position(|x| !x.is_finite())
+                {
+                    return Err(at(format!(
+                        "key {k}: the weight of target {t} is not finite ({})",
+                        c[skip + t]
+                    )));
+                }
+            }
             return Ok(times
                 .iter()
                 .zip(w.chunks_exact(per_key))
