@@ -283,3 +283,36 @@ fn solver_variants_agree() {
         assert!(max_dist(r, &results[0]) < 1e-6 * d);
     }
 }
+
+/// Regression (review): the gauge must not strain a component whose size changes. A bar lying
+/// diagonally blended with a copy at half the size must reach that copy exactly (up to a rigid
+/// motion) at α = 1.
+#[test]
+fn uniform_scale_in_gives_uniform_scale_out_without_fixed_vertices() {
+    let m = generate::bar(4.0, 0.6, 2, 16);
+    let m = m.with_positions(generate::rotate(
+        &m.positions,
+        [0.0; 3],
+        [1.0, 1.0, 0.3],
+        0.9,
+    ));
+    let half: Vec<[f64; 3]> = m.positions.iter().map(|p| p.map(|v| 0.5 * v)).collect();
+    let s = two(&m, half.clone());
+    let opts = BlendOptions {
+        fixed: FixedVertices::None,
+        ..Default::default()
+    };
+    let r = blend(&s, &Weights::Alpha(1.0), &opts).unwrap();
+    assert!(r.stats.converged);
+    assert!(r.stats.energy < 1e-12, "energy {}", r.stats.energy);
+    let fit = morphkit::geom::kabsch(&r.positions, &half, &[]);
+    let aligned: Vec<[f64; 3]> = r.positions.iter().map(|p| fit.apply(*p)).collect();
+    assert!(max_dist(&aligned, &half) < 1e-6 * bbox_diagonal(&half));
+    let topo = Topology::new(s.num_vertices(), s.triangles());
+    let mid = blend(&s, &Weights::Alpha(0.5), &opts).unwrap();
+    let q = blend_metrics(&s, &topo, &Weights::Alpha(0.5), &mid.positions).unwrap();
+    assert!(
+        q.edge_length_max < 1e-6,
+        "a uniform scale is reachable exactly: {q:?}"
+    );
+}

@@ -6,12 +6,10 @@
 //!
 //! - **fixed vertices spanning a plane** (three or more, not collinear): nothing else is needed;
 //!   their positions are interpolated linearly across the shapes, as the paper describes;
-//! - **no fixed vertex**: a *minimal gauge* removes exactly the six rigid degrees of freedom
-//!   without straining anything: vertex `a` (nearest the component's centroid) is pinned in
-//!   x, y and z; vertex `b` (farthest from `a`) is pinned in the two axes other than the dominant
-//!   axis of `b − a` (this removes the rotations except about `b − a`); vertex `c` (farthest from
-//!   the line `ab`) is pinned in the axis along which a rotation about `b − a` moves it most.
-//!   After the solve, the component is rigidly aligned (Kabsch) to the linear blend of the
+//! - **no fixed vertex**: a *minimal gauge* ([`Gauge`]) removes exactly the six rigid degrees
+//!   of freedom without straining anything: the solver holds the component in a frame where
+//!   `b − a` lies along x and `c` in the xy-plane, and pins `a` in x, y, z, `b` in y, z and `c`
+//!   in z. After the solve, the component is rigidly aligned (Kabsch) to the linear blend of the
 //!   same weights, so it sits where an artist expects it;
 //! - **one or two fixed vertices, or collinear ones**: explicitly given ids are rejected with
 //!   [`BlendError::UnderConstrained`](super::BlendError::UnderConstrained) (the component could
@@ -39,8 +37,8 @@ pub enum FixedVertices {
 pub struct Constraints {
     /// Fully fixed vertices (user-given or automatic), sorted.
     pub fixed: Vec<u32>,
-    /// Components held only by the gauge: their vertices, to align after each solve.
-    pub gauge_components: Vec<Vec<u32>>,
+    /// Components held only by the gauge, to align after each solve.
+    pub gauges: Vec<Gauge>,
     /// Per degree of freedom (`3 #V`): fixed by a boundary condition or by the gauge.
     pub fixed_dof: Vec<bool>,
 }
@@ -87,7 +85,7 @@ impl Constraints {
         }
         let diag = bbox_diagonal(base).max(f64::MIN_POSITIVE);
         let mut fixed_dof = vec![false; 3 * n];
-        let mut gauge_components = Vec::new();
+        let mut gauges = Vec::new();
         for (c, verts) in members.iter().enumerate() {
             let fixed_here: Vec<Point> = verts
                 .iter()
@@ -110,10 +108,11 @@ impl Constraints {
                 }
             }
             if verts.len() >= 3 {
-                for (v, axis) in gauge_pins(base, verts) {
+                let gauge = Gauge::new(base, verts);
+                for (v, axis) in gauge.pins() {
                     fixed_dof[3 * v as usize + axis] = true;
                 }
-                gauge_components.push(verts.clone());
+                gauges.push(gauge);
             } else {
                 // A lone vertex or a dangling pair: nothing to solve, keep it where it is.
                 for &v in verts {
@@ -129,7 +128,7 @@ impl Constraints {
         }
         Ok(Self {
             fixed,
-            gauge_components,
+            gauges,
             fixed_dof,
         })
     }
@@ -161,43 +160,97 @@ fn spans_plane(p: &[Point], tol: f64) -> bool {
     p.iter().any(|&c| norm(cross(d, sub(c, a))) / ld > tol)
 }
 
-/// The six pinned (vertex, axis) pairs of the minimal gauge of one component.
-fn gauge_pins(p: &[Point], verts: &[u32]) -> Vec<(u32, usize)> {
-    let inv = 1.0 / verts.len() as f64;
-    let mut centroid = [0.0; 3];
-    for &v in verts {
-        for k in 0..3 {
-            centroid[k] += p[v as usize][k] * inv;
-        }
-    }
-    let dist = |v: u32, q: Point| norm(sub(p[v as usize], q));
-    let a = *verts
-        .iter()
-        .min_by(|&&x, &&y| dist(x, centroid).total_cmp(&dist(y, centroid)))
-        .expect("non-empty");
-    let pa = p[a as usize];
-    let b = *verts
-        .iter()
-        .max_by(|&&x, &&y| dist(x, pa).total_cmp(&dist(y, pa)))
-        .expect("non-empty");
-    let d = sub(p[b as usize], pa);
-    let m = argmax_abs(d);
-    let moved = |v: u32| cross(d, sub(p[v as usize], pa));
-    let c = *verts
-        .iter()
-        .max_by(|&&x, &&y| norm(moved(x)).total_cmp(&norm(moved(y))))
-        .expect("non-empty");
-    let k = argmax_abs(moved(c));
-    let mut pins = vec![(a, 0), (a, 1), (a, 2)];
-    pins.extend((0..3).filter(|&ax| ax != m).map(|ax| (b, ax)));
-    pins.push((c, k));
-    pins
+/// The minimal gauge of one component: vertices `a` (nearest the centroid), `b` (farthest
+/// from `a`) and `c` (farthest from the line `ab`), and the rotation `frame` (rows
+/// $e_1 = \widehat{b - a}$, $e_3 = \widehat{e_1 \times (c - a)}$, $e_2 = e_3 \times e_1$) in which
+/// the solver holds the component. In that frame the pins are `a`: x, y, z; `b`: y, z; `c`: z.
+/// Every configuration of the component can be moved rigidly onto these pins (put `b − a`
+/// along x, then turn about x until `c` lies in the plane), so they remove exactly the rigid
+/// motions, whatever the blend does to the component's size and shape.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gauge {
+    /// The component's vertices.
+    pub vertices: Vec<u32>,
+    /// The pinned vertices `[a, b, c]`.
+    pub pinned: [u32; 3],
+    /// Rotation from world to solver coordinates (row-major, rows `e1, e2, e3`).
+    pub frame: [[f64; 3]; 3],
 }
 
-fn argmax_abs(v: Point) -> usize {
-    (0..3)
-        .max_by(|&i, &j| v[i].abs().total_cmp(&v[j].abs()))
-        .expect("three axes")
+impl Gauge {
+    fn new(p: &[Point], verts: &[u32]) -> Self {
+        let inv = 1.0 / verts.len() as f64;
+        let mut centroid = [0.0; 3];
+        for &v in verts {
+            for k in 0..3 {
+                centroid[k] += p[v as usize][k] * inv;
+            }
+        }
+        let dist = |v: u32, q: Point| norm(sub(p[v as usize], q));
+        let pick = |key: &dyn Fn(u32) -> f64| {
+            verts
+                .iter()
+                .copied()
+                .fold((verts[0], f64::NEG_INFINITY), |best, v| {
+                    let k = key(v);
+                    if k > best.1 {
+                        (v, k)
+                    } else {
+                        best
+                    }
+                })
+        };
+        let (a, _) = pick(&|v| -dist(v, centroid));
+        let pa = p[a as usize];
+        let (b, _) = pick(&|v| dist(v, pa));
+        let d = sub(p[b as usize], pa);
+        let (c, _) = pick(&|v| norm(cross(d, sub(p[v as usize], pa))));
+        let unit = |v: Point| {
+            let n = norm(v);
+            if n > 0.0 {
+                [v[0] / n, v[1] / n, v[2] / n]
+            } else {
+                v
+            }
+        };
+        let e1 = if norm(d) > 0.0 {
+            unit(d)
+        } else {
+            [1.0, 0.0, 0.0]
+        };
+        let mut e3 = unit(cross(e1, sub(p[c as usize], pa)));
+        if norm(e3) == 0.0 {
+            // All on one line: any plane through it will do.
+            let helper = if e1[0].abs() < 0.9 {
+                [1.0, 0.0, 0.0]
+            } else {
+                [0.0, 1.0, 0.0]
+            };
+            e3 = unit(cross(e1, helper));
+        }
+        let e2 = cross(e3, e1);
+        Self {
+            vertices: verts.to_vec(),
+            pinned: [a, b, c],
+            frame: [e1, e2, e3],
+        }
+    }
+
+    /// The pinned `(vertex, axis)` pairs, axes in solver coordinates.
+    pub fn pins(&self) -> [(u32, usize); 6] {
+        let [a, b, c] = self.pinned;
+        [(a, 0), (a, 1), (a, 2), (b, 1), (b, 2), (c, 2)]
+    }
+
+    /// World → solver coordinates.
+    pub fn to_solver(&self, q: Point) -> Point {
+        let f = &self.frame;
+        [
+            crate::mesh::dot(f[0], q),
+            crate::mesh::dot(f[1], q),
+            crate::mesh::dot(f[2], q),
+        ]
+    }
 }
 
 #[cfg(test)]
@@ -223,7 +276,7 @@ mod tests {
         let t = Topology::new(m.num_vertices(), &m.triangles);
         let c = Constraints::new(&s, &t, &FixedVertices::None).unwrap();
         assert_eq!(c.fixed_dof.iter().filter(|f| **f).count(), 6);
-        assert_eq!(c.gauge_components.len(), 1);
+        assert_eq!(c.gauges.len(), 1);
         // Auto finds the two poles on the rotation axis: collinear, so ignored.
         let c = Constraints::new(&s, &t, &FixedVertices::Auto).unwrap();
         assert_eq!(c.fixed_dof.iter().filter(|f| **f).count(), 6);
@@ -237,7 +290,7 @@ mod tests {
         let t = Topology::new(m.num_vertices(), &m.triangles);
         let c = Constraints::new(&s, &t, &FixedVertices::Auto).unwrap();
         assert_eq!(c.fixed.len(), 5 * 8, "rings at x ≤ 2 do not move");
-        assert!(c.gauge_components.is_empty());
+        assert!(c.gauges.is_empty());
         let e = Constraints::new(&s, &t, &FixedVertices::Ids(vec![0, 8])).unwrap_err();
         assert!(matches!(e, BlendError::UnderConstrained { fixed: 2, .. }));
         let e = Constraints::new(&s, &t, &FixedVertices::Ids(vec![0, 9999])).unwrap_err();

@@ -30,7 +30,7 @@ mod solver;
 mod spring_set;
 pub mod weights;
 
-pub use constraints::{Constraints, FixedVertices};
+pub use constraints::{Constraints, FixedVertices, Gauge};
 pub use metrics::{blend_metrics, linear_blend, BlendMetrics};
 pub use solver::{
     blend, BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, PhysicalBlend,

@@ -257,7 +257,7 @@ impl PhysicalBlend {
                 r.iter().sum::<f64>() / r.len() as f64
             }
         };
-        let x = shapes.positions(0).iter().flatten().copied().collect();
+        let x = initial_state(shapes, &constraints);
         let mut coefficients = vec![0.0; shapes.len()];
         coefficients[0] = 1.0;
         Ok(Self {
@@ -304,7 +304,7 @@ impl PhysicalBlend {
 
     /// Forgets the warm start: the next solve starts again from the base shape.
     pub fn reset(&mut self) {
-        self.x = self.shapes.positions(0).iter().flatten().copied().collect();
+        self.x = initial_state(&self.shapes, &self.constraints);
         self.coefficients.iter_mut().for_each(|c| *c = 0.0);
         self.coefficients[0] = 1.0;
         self.previous = None;
@@ -317,6 +317,8 @@ impl PhysicalBlend {
     pub fn solve(&mut self, weights: &Weights) -> Result<BlendResult, BlendError> {
         let start = Instant::now();
         let target = weights.coefficients(self.shapes.len())?;
+        // A diagonal shift needed by an earlier, harder solve is not carried over.
+        self.regularization = 0.0;
         let jump = target
             .iter()
             .zip(&self.coefficients)
@@ -624,7 +626,7 @@ impl PhysicalBlend {
     /// Current equilibrium as positions, gauge components aligned to the linear blend.
     fn output(&self, c: &[f64]) -> Vec<Point> {
         let mut p: Vec<Point> = self.x.chunks_exact(3).map(|v| [v[0], v[1], v[2]]).collect();
-        for comp in &self.constraints.gauge_components {
+        for comp in self.constraints.gauges.iter().map(|g| &g.vertices) {
             let from: Vec<Point> = comp.iter().map(|&v| p[v as usize]).collect();
             let to: Vec<Point> = comp
                 .iter()
@@ -668,6 +670,17 @@ fn block_entries(i: usize, j: usize) -> [(usize, usize); 21] {
         }
     }
     out
+}
+
+/// The base shape in solver coordinates: gauge components rotated into their frames.
+fn initial_state(shapes: &ShapeSet, constraints: &Constraints) -> Vec<f64> {
+    let mut p = shapes.positions(0).to_vec();
+    for g in &constraints.gauges {
+        for &v in &g.vertices {
+            p[v as usize] = g.to_solver(p[v as usize]);
+        }
+    }
+    p.into_iter().flatten().collect()
 }
 
 /// METIS ordering of the vertices with free coordinates (graph: the springs), expanded so that
