@@ -34,6 +34,9 @@ point cache; .obj/.ply/.off a single mesh (one frame only). --fixed FILE.json ho
 {\"fixed\": [vertex ids]} (0-based) or a bare array. Without fixed vertices, each connected
 component keeps only its rigid motion free and is aligned to the linear blend.";
 
+/// Most frames one call produces.
+const MAX_FRAMES: usize = 100_000;
+
 /// Arguments of `morphkit blend`.
 #[derive(clap::Args, Debug)]
 #[command(after_help = EXAMPLES)]
@@ -165,8 +168,8 @@ fn frame_weights(a: &BlendArgs, n_shapes: usize) -> anyhow::Result<Vec<Weights>>
         if n_shapes != 2 {
             bail!("--frames needs exactly one --target (got {}); use --weights-file for several targets", n_shapes - 1);
         }
-        if n < 2 {
-            bail!("--frames needs at least 2 frames (α = 0 and 1), got {n}");
+        if !(2..=MAX_FRAMES).contains(&n) {
+            bail!("--frames must be between 2 (α = 0 and 1) and {MAX_FRAMES}, got {n}");
         }
         return Ok((0..n)
             .map(|k| Weights::Alpha(k as f64 / (n - 1) as f64))
@@ -233,8 +236,10 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let mut unconverged = Vec::new();
     for (k, w) in weights.iter().enumerate() {
         let linear = linear_blend(&shapes, w)?;
-        let linear_metrics = blend_metrics(&shapes, &topology, w, &linear)?;
-        let mut row = json!({ "frame": k, "weights": weights_json(w), "linear": linear_metrics });
+        let mut row = json!({ "frame": k, "weights": weights_json(w) });
+        if a.report.is_some() {
+            row["linear"] = json!(blend_metrics(&shapes, &topology, w, &linear)?);
+        }
         let positions = match solver.as_mut() {
             None => linear,
             Some(s) => {
@@ -242,7 +247,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
                 if !r.stats.converged {
                     unconverged.push(k);
                 }
-                row["physical"] = json!(blend_metrics(&shapes, &topology, w, &r.positions)?);
+                if a.report.is_some() {
+                    row["physical"] = json!(blend_metrics(&shapes, &topology, w, &r.positions)?);
+                }
                 row["solver"] = json!(r.stats);
                 r.positions
             }
