@@ -361,9 +361,7 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
                         "the face element has no 'vertex_indices' or 'vertex_index' list",
                     )
                 })?;
-            polys
-                .indices
-                .reserve(el.count.checked_mul(3).unwrap_or(usize::MAX).min(room));
+            polys.indices.reserve(el.count.saturating_mul(3).min(room));
             Some(p)
         } else {
             None
