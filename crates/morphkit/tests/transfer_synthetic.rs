@@ -220,8 +220,11 @@ fn frames_with_other_connectivity_and_isolated_target_vertices_are_rejected() {
     let mut target = m.clone();
     target.positions.push([9.0, 9.0, 9.0]);
     target.positions.push([8.0, 9.0, 9.0]);
+    // Triangle t ↔ t, but not the identity (the vertex counts differ): anchored by a marker.
     let c = Correspondence {
         target_vertices: target.num_vertices(),
+        identity: false,
+        markers: vec![[0, 0]],
         ..Correspondence::identity(&m)
     };
     let e = AnimationTransfer::new(&m, &target, &c, &TransferOptions::default()).unwrap_err();
@@ -230,4 +233,27 @@ fn frames_with_other_connectivity_and_isolated_target_vertices_are_rejected() {
         "{e}"
     );
     assert!(e.to_string().contains("first: 50, 51"), "{e}");
+}
+
+#[test]
+fn identity_correspondence_of_other_sized_meshes_is_rejected_when_loaded() {
+    // Regression: `identity: true` with more target than source vertices used to pass
+    // validation and panic in the anchor centroid of `AnimationTransfer::new`.
+    let s = cylinder(10, 5, 1.0, 2.0);
+    let t = cylinder(12, 6, 1.0, 2.0);
+    let ns = s.num_triangles() as u32;
+    let c = Correspondence {
+        target_vertices: t.num_vertices(),
+        target_triangles: t.num_triangles(),
+        offsets: (0..=t.num_triangles() as u32).collect(),
+        matches: (0..t.num_triangles() as u32).map(|k| k % ns).collect(),
+        ..Correspondence::identity(&s)
+    };
+    let e = Correspondence::from_json(&c.to_json()).unwrap_err();
+    let msg = e.to_string();
+    for n in [s.num_vertices(), t.num_vertices()] {
+        assert!(msg.contains(&n.to_string()), "{msg}");
+    }
+    let e = AnimationTransfer::new(&s, &t, &c, &TransferOptions::default()).unwrap_err();
+    assert!(matches!(e, TransferError::Correspondence(_)), "{e}");
 }

@@ -15,9 +15,9 @@
 
 use super::correspondence::{Correspondence, GradientCombine};
 use super::error::{Side, TransferError};
-use super::gradients::GradientOperator;
+use super::gradients::{FlipCheck, GradientOperator};
 use super::solve::{SolverOptions, TransferSolver};
-use crate::mesh::{validate, Point, ShapeSet, TriMesh};
+use crate::mesh::{validate, Point, ShapeSet, ShapeSetError, TriMesh};
 use nalgebra::Matrix3;
 
 /// Where each transferred frame is placed.
@@ -47,7 +47,10 @@ pub struct AnimationTransfer {
     gradients: GradientOperator,
     correspondence: Correspondence,
     solver: TransferSolver,
-    source_triangles: Vec<[u32; 3]>,
+    /// The source reference (for checking frames' connectivity).
+    source_reference: TriMesh,
+    /// The target reference's normals, for [`AnimationTransfer::flipped_triangles`].
+    target_flips: FlipCheck,
     anchors: Vec<[u32; 2]>,
     source_anchor_ref: Point,
     target_anchor_ref: Point,
@@ -96,7 +99,8 @@ impl AnimationTransfer {
             gradients: GradientOperator::new(source_reference),
             correspondence: correspondence.clone(),
             solver,
-            source_triangles: source_reference.triangles.clone(),
+            source_reference: source_reference.clone(),
+            target_flips: FlipCheck::new(target),
             anchors,
             source_anchor_ref,
             target_anchor_ref,
@@ -122,8 +126,25 @@ impl AnimationTransfer {
     }
 
     /// Gradients of every source triangle of `frame` relative to the source reference.
+    /// Errors name frame 0; [`AnimationTransfer::source_gradients_at`] names another.
     pub fn source_gradients(&self, frame: &[Point]) -> Result<Vec<Matrix3<f64>>, TransferError> {
         self.gradients.gradients(frame)
+    }
+
+    /// [`AnimationTransfer::source_gradients`] of frame number `index`: errors name it.
+    pub fn source_gradients_at(
+        &self,
+        index: usize,
+        frame: &[Point],
+    ) -> Result<Vec<Matrix3<f64>>, TransferError> {
+        self.gradients.gradients_at(index, frame)
+    }
+
+    /// Target triangles of a transferred frame `x` that face against the orientation their
+    /// wanted gradient (`target_gradients`) gives them ([`FlipCheck::flipped`] with the target
+    /// reference's normals, computed once in [`AnimationTransfer::new`]).
+    pub fn flipped_triangles(&self, x: &[Point], target_gradients: &[Matrix3<f64>]) -> Vec<usize> {
+        self.target_flips.flipped(x, target_gradients)
     }
 
     /// Wanted gradient of every target triangle, from per-source-triangle gradients.
@@ -162,49 +183,68 @@ impl AnimationTransfer {
     }
 
     /// Transfers one source frame (positions over the source reference's connectivity).
+    /// Errors name frame 0; [`AnimationTransfer::transfer_frame_at`] names another.
     pub fn transfer_frame(&self, source_frame: &[Point]) -> Result<Vec<Point>, TransferError> {
-        let g = self.source_gradients(source_frame)?;
+        self.transfer_frame_at(0, source_frame)
+    }
+
+    /// [`AnimationTransfer::transfer_frame`] of frame number `index`: errors name it.
+    pub fn transfer_frame_at(
+        &self,
+        index: usize,
+        source_frame: &[Point],
+    ) -> Result<Vec<Point>, TransferError> {
+        let g = self.source_gradients_at(index, source_frame)?;
         let m = self.target_gradients(&g);
         self.solve_gradients(&m, Some(source_frame))
     }
 
-    /// Checks that `frames` share the source reference's connectivity.
+    /// Checks that `frames` share the source reference's connectivity (by
+    /// [`ShapeSet::check_connectivity`]; a shape set's frames all share frame 0's, so a
+    /// mismatch is reported for frame 0).
     pub fn check_frames(&self, frames: &ShapeSet) -> Result<(), TransferError> {
-        check_frames(&self.source_triangles, self.gradients_vertices(), frames)
-    }
-
-    fn gradients_vertices(&self) -> usize {
-        self.correspondence.source_vertices
+        check_frames(&self.source_reference, frames)
     }
 }
 
-fn check_frames(
-    reference: &[[u32; 3]],
-    num_vertices: usize,
-    frames: &ShapeSet,
-) -> Result<(), TransferError> {
-    if frames.num_vertices() != num_vertices {
-        return Err(TransferError::FrameVertexCount {
+/// [`ShapeSet::check_connectivity`] of the source reference against `frames`, with the
+/// result phrased from the frames' side (`expected` is the reference's).
+fn check_frames(reference: &TriMesh, frames: &ShapeSet) -> Result<(), TransferError> {
+    let none = [u32::MAX; 3];
+    match frames.check_connectivity("source reference", reference) {
+        Ok(()) => Ok(()),
+        Err(ShapeSetError::VertexCount {
+            expected, found, ..
+        }) => Err(TransferError::FrameVertexCount {
             frame: 0,
-            expected: num_vertices,
-            found: frames.num_vertices(),
-        });
-    }
-    let ft = frames.triangles();
-    let n = reference.len().max(ft.len());
-    for t in 0..n {
-        let e = reference.get(t).copied().unwrap_or([u32::MAX; 3]);
-        let f = ft.get(t).copied().unwrap_or([u32::MAX; 3]);
-        if e != f {
-            return Err(TransferError::FrameConnectivity {
+            expected: found,
+            found: expected,
+        }),
+        Err(ShapeSetError::Connectivity {
+            index,
+            expected,
+            found,
+            ..
+        }) => Err(TransferError::FrameConnectivity {
+            frame: 0,
+            triangle: index,
+            expected: found,
+            found: expected,
+        }),
+        Err(ShapeSetError::TriangleCount {
+            expected, found, ..
+        }) => {
+            // `expected`: the frames' count, `found`: the reference's.
+            let t = expected.min(found);
+            Err(TransferError::FrameConnectivity {
                 frame: 0,
                 triangle: t,
-                expected: e,
-                found: f,
-            });
+                expected: reference.triangles.get(t).copied().unwrap_or(none),
+                found: frames.triangles().get(t).copied().unwrap_or(none),
+            })
         }
+        Err(e) => Err(e.into()),
     }
-    Ok(())
 }
 
 /// One-shot transfer of every frame of `frames` (which must share `source_reference`'s
@@ -221,7 +261,8 @@ pub fn transfer_animation(
     frames
         .all_positions()
         .iter()
-        .map(|p| tr.transfer_frame(p))
+        .enumerate()
+        .map(|(i, p)| tr.transfer_frame_at(i, p))
         .collect()
 }
 
@@ -277,5 +318,97 @@ mod tests {
             e,
             TransferError::FrameConnectivity { triangle: 3, .. }
         ));
+    }
+
+    #[test]
+    fn identity_correspondence_of_other_sized_meshes_is_an_error_not_a_panic() {
+        let s = sphere(8, 6, 1.0);
+        let t = sphere(12, 8, 1.0);
+        let ns = s.num_triangles() as u32;
+        let c = Correspondence {
+            target_vertices: t.num_vertices(),
+            target_triangles: t.num_triangles(),
+            offsets: (0..=t.num_triangles() as u32).collect(),
+            matches: (0..t.num_triangles() as u32).map(|k| k % ns).collect(),
+            ..Correspondence::identity(&s)
+        };
+        let e = AnimationTransfer::new(&s, &t, &c, &TransferOptions::default()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                TransferError::Correspondence(
+                    crate::transfer::CorrespondenceError::IdentityMismatch { .. }
+                )
+            ),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn frame_errors_name_the_frame() {
+        let m = sphere(8, 6, 1.0);
+        let tr = AnimationTransfer::new(
+            &m,
+            &m,
+            &Correspondence::identity(&m),
+            &TransferOptions::default(),
+        )
+        .unwrap();
+        let short = &m.positions[..m.num_vertices() - 1];
+        assert!(matches!(
+            tr.transfer_frame_at(7, short),
+            Err(TransferError::FrameVertexCount { frame: 7, .. })
+        ));
+        assert!(matches!(
+            tr.source_gradients_at(3, short),
+            Err(TransferError::FrameVertexCount { frame: 3, .. })
+        ));
+        // Fewer triangles in the frames: reported at the first missing one.
+        let mut fewer = m.clone();
+        fewer.triangles.pop();
+        let frames = ShapeSet::from_meshes(vec![("f".into(), fewer)]).unwrap();
+        let last = m.num_triangles() - 1;
+        match tr.check_frames(&frames).unwrap_err() {
+            TransferError::FrameConnectivity {
+                frame: 0,
+                triangle,
+                expected,
+                found,
+            } => {
+                assert_eq!(triangle, last);
+                assert_eq!(expected, m.triangles[last]);
+                assert_eq!(found, [u32::MAX; 3]);
+            }
+            e => panic!("{e}"),
+        }
+        // Another vertex count.
+        let mut more = m.clone();
+        more.positions.push([9.0; 3]);
+        let frames = ShapeSet::from_meshes(vec![("f".into(), more)]).unwrap();
+        assert!(matches!(
+            tr.check_frames(&frames),
+            Err(TransferError::FrameVertexCount {
+                frame: 0,
+                expected,
+                found,
+            }) if expected == m.num_vertices() && found == m.num_vertices() + 1
+        ));
+    }
+
+    #[test]
+    fn precomputed_flip_check_agrees_with_the_one_shot_test() {
+        let m = sphere(10, 7, 1.0);
+        let tr = AnimationTransfer::new(
+            &m,
+            &m,
+            &Correspondence::identity(&m),
+            &TransferOptions::default(),
+        )
+        .unwrap();
+        let mirrored: Vec<Point> = m.positions.iter().map(|p| [-p[0], p[1], p[2]]).collect();
+        let g = vec![Matrix3::identity(); m.num_triangles()];
+        let want = crate::transfer::flipped_triangles(&m, &mirrored, &g);
+        assert!(!want.is_empty());
+        assert_eq!(tr.flipped_triangles(&mirrored, &g), want);
     }
 }

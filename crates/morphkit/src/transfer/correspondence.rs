@@ -21,6 +21,7 @@
 //! sparse factorizations.
 
 use super::error::{CorrespondenceError, Side, TransferError};
+use super::gradients::{degeneracy_tolerance, reference_frame_inverse};
 use super::kdtree::KdTree;
 use super::lsmesh::{LeastSquaresMesh, LsMeshOptions};
 use super::markers::Markers;
@@ -193,8 +194,10 @@ impl Correspondence {
             .collect()
     }
 
-    /// Checks the structure and that the meshes have the recorded sizes.
+    /// Checks the structure ([`Correspondence::validate`]) and that the meshes have the
+    /// recorded sizes.
     pub fn check(&self, source: &TriMesh, target: &TriMesh) -> Result<(), TransferError> {
+        self.validate()?;
         for (side, m, nv, nf) in [
             (
                 Side::Source,
@@ -235,7 +238,9 @@ impl Correspondence {
         Ok(c)
     }
 
-    /// Structural checks: format, offsets, index ranges, no empty match list.
+    /// Structural checks: format, offsets, every index read from the file in range, no empty
+    /// match list, and for the identity equal mesh sizes and matches `t ↔ [t]`. After it
+    /// passes, no method of the correspondence indexes out of range.
     pub fn validate(&self) -> Result<(), CorrespondenceError> {
         let bad = |m: String| Err(CorrespondenceError::Invalid(m));
         if self.format != FORMAT || self.version != VERSION {
@@ -244,31 +249,98 @@ impl Correspondence {
                 self.format, self.version
             ));
         }
+        // Counts must fit the u32 indices the file stores.
+        for (what, n) in [
+            ("source vertex", self.source_vertices),
+            ("source triangle", self.source_triangles),
+            ("target vertex", self.target_vertices),
+            ("target triangle", self.target_triangles),
+        ] {
+            if n > u32::MAX as usize {
+                return bad(format!("{what} count {n} exceeds the 32-bit index range"));
+            }
+        }
+        if self.identity
+            && (self.source_vertices != self.target_vertices
+                || self.source_triangles != self.target_triangles)
+        {
+            return Err(CorrespondenceError::IdentityMismatch {
+                source_vertices: self.source_vertices,
+                source_triangles: self.source_triangles,
+                target_vertices: self.target_vertices,
+                target_triangles: self.target_triangles,
+            });
+        }
         if self.offsets.len() != self.target_triangles + 1
             || self.offsets.first() != Some(&0)
             || *self.offsets.last().unwrap_or(&0) as usize != self.matches.len()
         {
-            return bad("offsets do not match the target triangle count".into());
+            return bad(format!(
+                "{} offsets ending at {} for {} target triangles and {} matches (expected {} \
+                 offsets from 0 to the match count)",
+                self.offsets.len(),
+                self.offsets.last().copied().unwrap_or(0),
+                self.target_triangles,
+                self.matches.len(),
+                self.target_triangles + 1
+            ));
         }
+        // Strictly increasing from 0 to matches.len(): every range is non-empty and in bounds.
         for t in 0..self.target_triangles {
             if self.offsets[t + 1] <= self.offsets[t] {
-                return bad(format!("target triangle {t} has no source triangle"));
+                return bad(format!(
+                    "target triangle {t} has no source triangle (offsets {} then {})",
+                    self.offsets[t],
+                    self.offsets[t + 1]
+                ));
             }
         }
-        if let Some(&s) = self
+        if let Some((k, &s)) = self
             .matches
             .iter()
-            .find(|&&s| s as usize >= self.source_triangles)
+            .enumerate()
+            .find(|(_, &s)| s as usize >= self.source_triangles)
         {
             return bad(format!(
-                "source triangle {s} is out of range ({} source triangles)",
+                "match {k}: source triangle {s} is out of range ({} source triangles)",
                 self.source_triangles
             ));
         }
-        if let Some(p) = self.markers.iter().find(|p| {
+        if self.identity {
+            if let Some(t) = (0..self.target_triangles).find(|&t| self.matches_of(t) != [t as u32])
+            {
+                return Err(CorrespondenceError::IdentityMatches {
+                    target_triangle: t,
+                    matches: self.matches_of(t).to_vec(),
+                });
+            }
+        }
+        if let Some((k, p)) = self.markers.iter().enumerate().find(|(_, p)| {
             p[0] as usize >= self.source_vertices || p[1] as usize >= self.target_vertices
         }) {
-            return bad(format!("marker {p:?} is out of range"));
+            return bad(format!(
+                "marker {k} {p:?} is out of range ({} source / {} target vertices)",
+                self.source_vertices, self.target_vertices
+            ));
+        }
+        if let Some(&t) = self
+            .normal_violations
+            .iter()
+            .find(|&&t| t as usize >= self.target_triangles)
+        {
+            return bad(format!(
+                "normal violation: target triangle {t} is out of range ({} target triangles)",
+                self.target_triangles
+            ));
+        }
+        if let Some((k, r)) = self.marker_residuals.iter().enumerate().find(|(_, r)| {
+            r.source as usize >= self.source_vertices || r.target as usize >= self.target_vertices
+        }) {
+            return bad(format!(
+                "marker residual {k}: vertices [{}, {}] are out of range ({} source / {} target \
+                 vertices)",
+                r.source, r.target, self.source_vertices, self.target_vertices
+            ));
         }
         Ok(())
     }
@@ -302,6 +374,23 @@ fn centroids_and_normals(p: &[Point], tris: &[[u32; 3]]) -> (Vec<Point>, Vec<Poi
             (cen, n)
         })
         .unzip()
+}
+
+/// Source triangles that may be matched: a non-zero warped normal (`warped_normals`) and not
+/// degenerate in the source reference by the same test as
+/// [`GradientOperator`](super::GradientOperator) (which gives
+/// degenerate triangles the identity gradient, so matching one would feed the identity into
+/// the mean).
+fn usable_source_triangles(source: &TriMesh, warped_normals: &[Point]) -> Vec<bool> {
+    let tol = degeneracy_tolerance(source);
+    source
+        .triangles
+        .iter()
+        .zip(warped_normals)
+        .map(|(&tri, n)| {
+            norm(*n) > 0.0 && reference_frame_inverse(&source.positions, tri, tol).is_some()
+        })
+        .collect()
 }
 
 /// Computes the correspondence of `source` and `target` from `markers`.
@@ -348,13 +437,7 @@ pub fn correspond(
 
     let (cs, ns) = centroids_and_normals(&ws, &source.triangles);
     let (ct, nt) = centroids_and_normals(&wt, &target.triangles);
-    // Source triangles degenerate in the reference have no meaningful gradient.
-    let (_, ns_ref) = centroids_and_normals(&source.positions, &source.triangles);
-    let usable: Vec<bool> = ns
-        .iter()
-        .zip(&ns_ref)
-        .map(|(a, b)| norm(*a) > 0.0 && norm(*b) > 0.0)
-        .collect();
+    let usable = usable_source_triangles(source, &ns);
     let radius = opts.radius_factor * mean_edge_length(&ws, &topo_s);
     let tree = KdTree::new(&cs);
 
@@ -426,6 +509,7 @@ pub fn correspond(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::transfer::gradients::GradientOperator;
     use crate::transfer::testmesh::sphere;
 
     fn markers_on(m: &TriMesh) -> Markers {
@@ -506,5 +590,140 @@ mod tests {
             Correspondence::from_json(&bad.to_json()),
             Err(CorrespondenceError::Invalid(_))
         ));
+    }
+
+    #[test]
+    fn identity_flag_with_unequal_counts_is_a_typed_error() {
+        let s = sphere(8, 6, 1.0);
+        let t = sphere(12, 8, 1.0);
+        let ns = s.num_triangles() as u32;
+        let bad = Correspondence {
+            target_vertices: t.num_vertices(),
+            target_triangles: t.num_triangles(),
+            offsets: (0..=t.num_triangles() as u32).collect(),
+            matches: (0..t.num_triangles() as u32).map(|k| k % ns).collect(),
+            ..Correspondence::identity(&s)
+        };
+        let e = Correspondence::from_json(&bad.to_json()).unwrap_err();
+        match e {
+            CorrespondenceError::IdentityMismatch {
+                source_vertices,
+                target_vertices,
+                source_triangles,
+                target_triangles,
+            } => {
+                assert_eq!(source_vertices, s.num_vertices());
+                assert_eq!(target_vertices, t.num_vertices());
+                assert_eq!(source_triangles, s.num_triangles());
+                assert_eq!(target_triangles, t.num_triangles());
+            }
+            e => panic!("{e}"),
+        }
+        // `check` validates too, so a hand-built correspondence cannot slip through.
+        assert!(matches!(
+            bad.check(&s, &t),
+            Err(TransferError::Correspondence(
+                CorrespondenceError::IdentityMismatch { .. }
+            ))
+        ));
+        // Equal counts but matches other than t ↔ [t].
+        let mut swapped = Correspondence::identity(&s);
+        swapped.matches.swap(2, 3);
+        assert!(matches!(
+            Correspondence::from_json(&swapped.to_json()),
+            Err(CorrespondenceError::IdentityMatches {
+                target_triangle: 2,
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn malformed_correspondence_files_are_errors_not_panics() {
+        let m = sphere(16, 10, 1.0);
+        let r = correspond(&m, &m, &markers_on(&m), &CorrespondenceOptions::default()).unwrap();
+        let good = r.correspondence;
+        let nf = good.target_triangles;
+        type Corrupt = Box<dyn Fn(&mut Correspondence)>;
+        let corruptions: Vec<(&str, Corrupt)> = vec![
+            ("offsets not increasing", Box::new(|c| c.offsets.swap(1, 2))),
+            (
+                "offset beyond matches",
+                Box::new(|c| c.offsets[1] = u32::MAX),
+            ),
+            (
+                "offsets too short",
+                Box::new(|c| {
+                    c.offsets.pop();
+                }),
+            ),
+            (
+                "last offset",
+                Box::new(|c| *c.offsets.last_mut().unwrap() -= 1),
+            ),
+            ("match range", Box::new(move |c| c.matches[0] = nf as u32)),
+            ("marker source", Box::new(|c| c.markers[0][0] = u32::MAX)),
+            (
+                "marker target",
+                Box::new(|c| c.markers[1][1] = c.target_vertices as u32),
+            ),
+            (
+                "normal violation",
+                Box::new(move |c| c.normal_violations.push(nf as u32)),
+            ),
+            (
+                "residual source",
+                Box::new(|c| c.marker_residuals[0].source = u32::MAX),
+            ),
+            (
+                "residual target",
+                Box::new(|c| c.marker_residuals[0].target = u32::MAX),
+            ),
+            ("huge count", Box::new(|c| c.target_triangles = usize::MAX)),
+            (
+                "identity sizes",
+                Box::new(|c| {
+                    c.identity = true;
+                    c.source_vertices -= 1;
+                }),
+            ),
+            ("format", Box::new(|c| c.format = "x".into())),
+        ];
+        for (what, f) in corruptions {
+            let mut c = good.clone();
+            f(&mut c);
+            let res = std::panic::catch_unwind(|| Correspondence::from_json(&c.to_json()));
+            assert!(matches!(res, Ok(Err(_))), "{what}: {res:?}");
+        }
+        assert!(Correspondence::from_json(&good.to_json()).is_ok());
+    }
+
+    #[test]
+    fn tiny_source_triangles_are_unusable_exactly_when_gradients_call_them_degenerate() {
+        // A tetrahedron and a sliver fan: areas 0, below and above the gradient
+        // operator's tolerance (1e-14 · diag²; diag ≈ 4 here).
+        let mut m = crate::mesh::TriMesh::new(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.1, 0.0],
+                [0.2, 1.0, 0.1],
+                [0.3, 0.2, 1.0],
+                [2.0, 0.0, 0.0],
+                [2.0, 1e-14, 0.0],
+                [3.0, 1e-11, 0.0],
+                [4.0, 0.0, 0.0],
+            ],
+            vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+        );
+        m.triangles.push([1, 4, 5]); // doubled area ≈ 1e-14: non-zero but degenerate
+        m.triangles.push([1, 4, 6]); // doubled area ≈ 1e-11: usable
+        m.triangles.push([0, 4, 7]); // exactly collinear
+        let (_, n) = centroids_and_normals(&m.positions, &m.triangles);
+        assert!(norm(n[4]) > 0.0, "the sliver has a (non-zero) normal");
+        let usable = usable_source_triangles(&m, &n);
+        assert_eq!(usable, vec![true, true, true, true, false, true, false]);
+        let op = GradientOperator::new(&m);
+        let degenerate: Vec<usize> = (0..usable.len()).filter(|&t| !usable[t]).collect();
+        assert_eq!(op.degenerate(), degenerate.as_slice());
     }
 }

@@ -106,6 +106,27 @@ pub enum CorrespondenceError {
     /// A correspondence file does not fit the meshes or is malformed.
     #[error("correspondence: {0}")]
     Invalid(String),
+    /// A correspondence marked as the identity is between meshes of different sizes.
+    #[error("correspondence: marked as the identity, but the source has {source_vertices} vertices / {source_triangles} triangles and the target {target_vertices} / {target_triangles} (the identity needs equal counts)")]
+    IdentityMismatch {
+        /// Source vertex count recorded.
+        source_vertices: usize,
+        /// Source triangle count recorded.
+        source_triangles: usize,
+        /// Target vertex count recorded.
+        target_vertices: usize,
+        /// Target triangle count recorded.
+        target_triangles: usize,
+    },
+    /// A correspondence marked as the identity does not match each target triangle to the
+    /// source triangle with the same index only.
+    #[error("correspondence: marked as the identity, but target triangle {target_triangle} matches source triangles {matches:?} (the identity matches it to [{target_triangle}] only)")]
+    IdentityMatches {
+        /// The first target triangle whose match list is not `[t]`.
+        target_triangle: usize,
+        /// Its match list.
+        matches: Vec<u32>,
+    },
 }
 
 /// Why a transfer could not be set up or run.
@@ -196,4 +217,11 @@ pub enum TransferError {
     /// The sparse solve failed.
     #[error("transfer solve: {0}")]
     Solve(#[from] SolveError),
+    /// The correspondence is malformed (fails [`super::Correspondence::validate`]).
+    #[error(transparent)]
+    Correspondence(#[from] CorrespondenceError),
+    /// The source frames do not fit the source reference in a way the other variants do not
+    /// describe.
+    #[error("source frames: {0}")]
+    Frames(#[from] crate::mesh::ShapeSetError),
 }

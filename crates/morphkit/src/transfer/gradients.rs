@@ -36,6 +36,28 @@ pub fn triangle_frame(p: &[Point], t: [u32; 3]) -> Option<Matrix3<f64>> {
     ]))
 }
 
+/// The degeneracy tolerance of a reference mesh: [`DEGENERATE_AREA`] times its squared
+/// bounding-box diagonal, compared with a triangle's doubled area $\|n\|$.
+pub fn degeneracy_tolerance(reference: &TriMesh) -> f64 {
+    let d = reference.bbox_diagonal();
+    DEGENERATE_AREA * d * d
+}
+
+/// $V^{-1}$ of triangle `t` of a reference pose `p`, or `None` when the triangle is
+/// *degenerate*: its doubled area $\|n\|$ is not above `tol` (from
+/// [`degeneracy_tolerance`]) or its frame is not invertible. This is the one degeneracy test
+/// of the transfer pipeline: degenerate source triangles get the identity gradient
+/// ([`GradientOperator`]) and are never matched ([`super::correspond`]); degenerate target
+/// triangles are skipped by the solve ([`super::TransferSolver`]).
+pub fn reference_frame_inverse(p: &[Point], t: [u32; 3], tol: f64) -> Option<Matrix3<f64>> {
+    let n = norm(crate::mesh::triangle_normal(p, t));
+    if n > tol {
+        triangle_frame(p, t).and_then(|v| v.try_inverse())
+    } else {
+        None
+    }
+}
+
 /// Precomputed $V^{-1}$ of every triangle of a reference pose; gives the gradients of any
 /// frame with the same connectivity in `O(#F)`.
 #[derive(Clone, Debug)]
@@ -48,24 +70,17 @@ pub struct GradientOperator {
 
 impl GradientOperator {
     /// Inverts the frame of every triangle of `reference`. Degenerate triangles (see
-    /// [`DEGENERATE_AREA`]) are listed in [`GradientOperator::degenerate`] and get the
-    /// identity as their gradient in every frame.
+    /// [`DEGENERATE_AREA`] and [`reference_frame_inverse`]) are listed in
+    /// [`GradientOperator::degenerate`] and get the identity as their gradient in every frame.
     pub fn new(reference: &TriMesh) -> Self {
-        let d = reference.bbox_diagonal();
-        let tol = DEGENERATE_AREA * d * d;
+        let tol = degeneracy_tolerance(reference);
         let mut degenerate = Vec::new();
         let inverse = reference
             .triangles
             .iter()
             .enumerate()
             .map(|(t, &tri)| {
-                let n = norm(crate::mesh::triangle_normal(&reference.positions, tri));
-                let inv = if n > tol {
-                    triangle_frame(&reference.positions, tri).and_then(|v| v.try_inverse())
-                } else {
-                    None
-                };
-                inv.unwrap_or_else(|| {
+                reference_frame_inverse(&reference.positions, tri, tol).unwrap_or_else(|| {
                     degenerate.push(t);
                     Matrix3::zeros()
                 })
@@ -98,10 +113,21 @@ impl GradientOperator {
     /// (positions over the reference connectivity). A triangle that collapses in the frame gets
     /// $\tilde V$ with a zero third column (its deformed normal is zero), which is the limit
     /// of the formula, not NaN.
+    /// Errors name frame 0; use [`GradientOperator::gradients_at`] to name another.
     pub fn gradients(&self, frame: &[Point]) -> Result<Vec<Matrix3<f64>>, TransferError> {
+        self.gradients_at(0, frame)
+    }
+
+    /// [`GradientOperator::gradients`] of frame number `index` of an animation: errors name
+    /// that frame.
+    pub fn gradients_at(
+        &self,
+        index: usize,
+        frame: &[Point],
+    ) -> Result<Vec<Matrix3<f64>>, TransferError> {
         if frame.len() != self.num_vertices {
             return Err(TransferError::FrameVertexCount {
-                frame: 0,
+                frame: index,
                 expected: self.num_vertices,
                 found: frame.len(),
             });
@@ -143,41 +169,76 @@ pub fn deformation_gradients(
     GradientOperator::new(reference).gradients(frame)
 }
 
-/// Triangles of `frame` (over `reference`'s connectivity) that face against the orientation
-/// their intended gradient gives them: triangle `t` is flipped when its frame normal
-/// $\tilde n_t$ satisfies $\tilde n_t \cdot (\operatorname{cof} M_t)\, n_t \le 0$, with $n_t$
-/// the reference normal and $\operatorname{cof} M = \det(M) M^{-\top}$ the cofactor matrix,
-/// which maps normals the way $M$ maps the surface. Degenerate triangles are skipped.
+/// Precomputed reference normals for [`FlipCheck::flipped`]: build once per reference mesh
+/// and test every frame against it.
+#[derive(Clone, Debug)]
+pub struct FlipCheck {
+    triangles: Vec<[u32; 3]>,
+    /// Reference normal of every triangle (zero for a zero-area triangle).
+    normals: Vec<Point>,
+}
+
+impl FlipCheck {
+    /// Computes the normals of `reference`'s triangles.
+    pub fn new(reference: &TriMesh) -> Self {
+        Self {
+            triangles: reference.triangles.clone(),
+            normals: reference
+                .triangles
+                .iter()
+                .map(|&t| crate::mesh::triangle_normal(&reference.positions, t))
+                .collect(),
+        }
+    }
+
+    /// Number of triangles.
+    pub fn num_triangles(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Triangles of `frame` (over the reference's connectivity) that face against the
+    /// orientation their intended gradient gives them: triangle `t` is flipped when its frame
+    /// normal $\tilde n_t$ satisfies $\tilde n_t \cdot (\operatorname{cof} M_t)\, n_t \le 0$,
+    /// with $n_t$ the reference normal and $\operatorname{cof} M = \det(M) M^{-\top}$ the
+    /// cofactor matrix, which maps normals the way $M$ maps the surface. Zero-area triangles
+    /// (in the reference or the frame) are skipped.
+    pub fn flipped(&self, frame: &[Point], intended: &[Matrix3<f64>]) -> Vec<usize> {
+        let mut out = Vec::new();
+        for (t, (&tri, &n0)) in self.triangles.iter().zip(&self.normals).enumerate() {
+            let n1 = crate::mesh::triangle_normal(frame, tri);
+            if norm(n0) == 0.0 || norm(n1) == 0.0 {
+                continue;
+            }
+            let m = &intended[t];
+            // Columns of the cofactor matrix: cross products of M's columns.
+            let c = |i: usize, j: usize| {
+                let a = m.column(i);
+                let b = m.column(j);
+                Vector3::new(
+                    a[1] * b[2] - a[2] * b[1],
+                    a[2] * b[0] - a[0] * b[2],
+                    a[0] * b[1] - a[1] * b[0],
+                )
+            };
+            let cof = Matrix3::from_columns(&[c(1, 2), c(2, 0), c(0, 1)]);
+            let mapped = cof * Vector3::from(n0);
+            if dot(n1, [mapped.x, mapped.y, mapped.z]) <= 0.0 {
+                out.push(t);
+            }
+        }
+        out
+    }
+}
+
+/// One-shot [`FlipCheck::flipped`]: triangles of `frame` (over `reference`'s connectivity)
+/// that face against the orientation their intended gradient gives them. For many frames
+/// build a [`FlipCheck`] (or use [`super::AnimationTransfer::flipped_triangles`]) once.
 pub fn flipped_triangles(
     reference: &TriMesh,
     frame: &[Point],
     intended: &[Matrix3<f64>],
 ) -> Vec<usize> {
-    let mut out = Vec::new();
-    for (t, &tri) in reference.triangles.iter().enumerate() {
-        let n0 = crate::mesh::triangle_normal(&reference.positions, tri);
-        let n1 = crate::mesh::triangle_normal(frame, tri);
-        if norm(n0) == 0.0 || norm(n1) == 0.0 {
-            continue;
-        }
-        let m = &intended[t];
-        // Columns of the cofactor matrix: cross products of M's columns.
-        let c = |i: usize, j: usize| {
-            let a = m.column(i);
-            let b = m.column(j);
-            Vector3::new(
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            )
-        };
-        let cof = Matrix3::from_columns(&[c(1, 2), c(2, 0), c(0, 1)]);
-        let mapped = cof * Vector3::from(n0);
-        if dot(n1, [mapped.x, mapped.y, mapped.z]) <= 0.0 {
-            out.push(t);
-        }
-    }
-    out
+    FlipCheck::new(reference).flipped(frame, intended)
 }
 
 #[cfg(test)]

@@ -51,6 +51,8 @@ pub struct LeastSquaresMesh {
     omega: f64,
     cholesky: Cholesky,
     laplacian: MeanValueLaplacian,
+    /// Which mesh this is, for errors.
+    side: Side,
 }
 
 impl LeastSquaresMesh {
@@ -127,7 +129,14 @@ impl LeastSquaresMesh {
             omega: opts.omega,
             cholesky,
             laplacian,
+            side,
         })
+    }
+
+    /// Which mesh this least-squares mesh was built for (as given to
+    /// [`LeastSquaresMesh::new`]).
+    pub fn side(&self) -> Side {
+        self.side
     }
 
     /// The Laplacian used, with its safeguard statistics.
@@ -140,7 +149,8 @@ impl LeastSquaresMesh {
     pub fn solve(&self, targets: &[Point]) -> Result<Vec<Point>, CorrespondenceError> {
         if targets.len() != self.constrained.len() {
             return Err(CorrespondenceError::Invalid(format!(
-                "{} constraint positions for {} constrained vertices",
+                "{} least-squares mesh: {} constraint positions for {} constrained vertices",
+                self.side,
                 targets.len(),
                 self.constrained.len()
             )));
@@ -159,7 +169,7 @@ impl LeastSquaresMesh {
         self.cholesky
             .solve_in_place(&mut rhs, 3)
             .map_err(|source| CorrespondenceError::Solve {
-                side: Side::Source,
+                side: self.side,
                 source,
             })?;
         let mut out = self.positions.clone();
@@ -249,5 +259,16 @@ mod tests {
                 ..
             }
         ));
+    }
+
+    #[test]
+    fn solve_errors_name_the_mesh_side() {
+        let m = grid(4, 3, 1.0);
+        let topo = Topology::new(m.num_vertices(), &m.triangles);
+        let ls = LeastSquaresMesh::new(&m, &topo, &[0, 4], &LsMeshOptions::default(), Side::Target)
+            .unwrap();
+        assert_eq!(ls.side(), Side::Target);
+        let e = ls.solve(&[[0.0; 3]]).unwrap_err().to_string();
+        assert!(e.contains("target"), "{e}");
     }
 }

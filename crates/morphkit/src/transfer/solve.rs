@@ -25,8 +25,8 @@
 //! then one assembly of $A^\top c$ and a 3-right-hand-side solve.
 
 use super::error::{Side, TransferError};
-use super::gradients::DEGENERATE_AREA;
-use crate::mesh::{norm, triangle_normal, validate, Point, Topology, TriMesh};
+use super::gradients::{degeneracy_tolerance, reference_frame_inverse};
+use crate::mesh::{validate, Point, Topology, TriMesh};
 use crate::sparse::{Cholesky, Dirichlet, Ordering, SymmetricPattern};
 use nalgebra::{Matrix3, Vector3};
 
@@ -79,28 +79,21 @@ impl TransferSolver {
         }
         let nv = target.num_vertices();
         let p = &target.positions;
-        let diag = target.bbox_diagonal();
-        let tol = DEGENERATE_AREA * diag * diag;
+        let tol = degeneracy_tolerance(target);
         let nf = target.num_triangles();
         let mean_area = (0..nf).map(|t| target.triangle_area(t)).sum::<f64>() / nf as f64;
         let mut weight = Vec::with_capacity(nf);
         let mut coeff = Vec::with_capacity(nf);
         let mut skipped = Vec::new();
         for (t, &tri) in target.triangles.iter().enumerate() {
-            let n = norm(triangle_normal(p, tri));
-            let inv = if n > tol {
-                super::gradients::triangle_frame(p, tri).and_then(|v| v.try_inverse())
-            } else {
-                None
-            };
-            match inv {
+            match reference_frame_inverse(p, tri, tol) {
                 Some(inv) => {
                     let r1: Vector3<f64> = inv.row(0).transpose();
                     let r2: Vector3<f64> = inv.row(1).transpose();
                     coeff.push([-(r1 + r2), r1, r2]);
                     weight.push(match opts.weighting {
                         TriangleWeighting::Uniform => 1.0,
-                        TriangleWeighting::Area => 0.5 * n / mean_area,
+                        TriangleWeighting::Area => target.triangle_area(t) / mean_area,
                     });
                 }
                 None => {
