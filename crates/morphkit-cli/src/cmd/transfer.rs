@@ -6,8 +6,8 @@ use crate::util::progress;
 use anyhow::{bail, Context};
 use morphkit::io::{self, Format, FramesOptions};
 use morphkit::transfer::{
-    correspond, flipped_triangles, AnimationTransfer, Correspondence, CorrespondenceOptions,
-    GradientCombine, Markers, TransferOptions, TranslationMode, TriangleWeighting,
+    correspond, AnimationTransfer, Correspondence, CorrespondenceOptions, GradientCombine, Markers,
+    TransferOptions, TranslationMode, TriangleWeighting,
 };
 use morphkit::ShapeSet;
 use serde_json::json;
@@ -222,7 +222,7 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         grad_total += (t2 - t1).as_secs_f64();
         solve_total += solve;
         solve_max = solve_max.max(solve);
-        flips.push(flipped_triangles(&target, &x, &g).len());
+        flips.push(tr.flipped_triangles(&x, &g).len());
         out.push((format!("frame_{i:04}"), x));
         pb.inc(1);
     }
