@@ -28,6 +28,7 @@ pub mod metrics;
 mod pcg;
 mod solver;
 mod spring_set;
+mod steihaug;
 pub mod weights;
 
 pub use constraints::{Constraints, FixedVertices, Gauge};

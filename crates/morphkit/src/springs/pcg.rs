@@ -30,7 +30,8 @@ pub(crate) struct HessianOperator<'a> {
 }
 
 impl HessianOperator<'_> {
-    fn apply(&self, p: &[f64], full: &mut [f64], out: &mut [f64]) {
+    /// `out = (H + mu I) p`; `full` is scratch of length `3 #V`.
+    pub(crate) fn apply(&self, p: &[f64], full: &mut [f64], out: &mut [f64]) {
         for (k, &i) in self.dof_index.iter().enumerate() {
             full[k] = if i == u32::MAX { 0.0 } else { p[i as usize] };
         }

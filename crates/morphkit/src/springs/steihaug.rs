@@ -1,0 +1,145 @@
+//! Steihaug–Toint truncated conjugate gradients for the trust-region subproblem
+//! (Steihaug 1983; Toint 1981; Nocedal & Wright, *Numerical Optimization*, 2nd ed., Alg. 7.2,
+//! with the preconditioned norm of Conn, Gould & Toint, *Trust-Region Methods*, §7.5.1).
+//!
+//! Approximately minimizes the quadratic model $m(p) = g^\top p + \tfrac12 p^\top H p$ of the
+//! energy over $\lVert p \rVert_M \le \Delta$, where $H$ is the *exact* (possibly indefinite)
+//! Hessian and $M$ the lagged Cholesky factor of a recent projected Hessian, which serves as
+//! preconditioner and defines the trust-region norm. Unlike the projected Newton step, a
+//! direction of negative curvature is not discarded: it is followed to the trust-region boundary,
+//! which is how the solver gets out of the soft, buckling configurations of thin features.
+//! Once the exact Hessian is positive definite near the equilibrium the iteration is plain
+//! preconditioned CG and the outer iteration is Newton's, with its quadratic convergence.
+
+use super::pcg::HessianOperator;
+use crate::sparse::Cholesky;
+
+/// How [`steihaug`] stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Termination {
+    /// The residual reached the requested tolerance inside the trust region.
+    Converged,
+    /// The step reached the trust-region boundary (along a CG or a negative-curvature direction).
+    Boundary,
+    /// The iteration budget ran out inside the trust region.
+    Budget,
+}
+
+/// Result of [`steihaug`].
+pub(crate) struct TruncatedStep {
+    /// The step, over free coordinates.
+    pub step: Vec<f64>,
+    /// Model decrease $-m(p) \ge 0$.
+    pub decrease: f64,
+    /// $\lVert p \rVert_M$.
+    pub m_norm: f64,
+    /// Why it stopped.
+    pub termination: Termination,
+    /// Relative residual $\lVert Hp + g\rVert / \lVert g \rVert$ of the last interior iterate.
+    pub relative_residual: f64,
+}
+
+/// When to stop the inner iteration.
+pub(crate) struct StopRule {
+    /// Relative residual (forcing term).
+    pub rtol: f64,
+    /// Absolute max-norm of the residual that is small enough whatever `rtol` says (a step
+    /// whose linear residual is far below the gradient tolerance needs no more accuracy).
+    pub atol_max: f64,
+    /// Iteration budget.
+    pub max_iter: usize,
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// The $\tau \ge 0$ with $\lVert z + \tau d\rVert_M = \Delta$ given $z^\top M z$, $z^\top M d$,
+/// $d^\top M d$.
+fn to_boundary(zz: f64, zd: f64, dd: f64, radius: f64) -> f64 {
+    let c = zz - radius * radius;
+    let disc = (zd * zd - dd * c).max(0.0);
+    if dd <= 0.0 {
+        return 0.0;
+    }
+    ((-zd + disc.sqrt()) / dd).max(0.0)
+}
+
+/// Steihaug–Toint CG on $H p = -g$ (free coordinates) within $\lVert p\rVert_M \le$ `radius`.
+/// `g` is the gradient restricted to free coordinates. Returns `None` when the preconditioner
+/// cannot be applied (no valid factorization).
+pub(crate) fn steihaug(
+    op: &HessianOperator<'_>,
+    precond: &Cholesky,
+    g: &[f64],
+    radius: f64,
+    stop: &StopRule,
+    iterations: &mut usize,
+) -> Option<TruncatedStep> {
+    let n = g.len();
+    let mut full = vec![0.0; op.dof_index.len()];
+    let mut z = vec![0.0; n];
+    let mut hz = vec![0.0; n];
+    let mut r = g.to_vec();
+    let gnorm = dot(g, g).sqrt();
+    let done = |z: Vec<f64>, hz: &[f64], zz: f64, termination, rel| {
+        let decrease = -(dot(g, &z) + 0.5 * dot(&z, hz));
+        TruncatedStep {
+            step: z,
+            decrease,
+            m_norm: zz.max(0.0).sqrt(),
+            termination,
+            relative_residual: rel,
+        }
+    };
+    if gnorm == 0.0 {
+        return Some(done(z, &hz, 0.0, Termination::Converged, 0.0));
+    }
+    let mut y = precond.solve(&r).ok()?;
+    let mut d: Vec<f64> = y.iter().map(|v| -v).collect();
+    let mut ry = dot(&r, &y);
+    // M-inner products of the iterate and the direction, by recurrence.
+    let (mut zz, mut zd, mut dd) = (0.0, 0.0, ry);
+    let mut hd = vec![0.0; n];
+    let mut rel = 1.0;
+    for _ in 0..stop.max_iter {
+        *iterations += 1;
+        op.apply(&d, &mut full, &mut hd);
+        let kappa = dot(&d, &hd);
+        if !kappa.is_finite() {
+            return None;
+        }
+        let alpha = ry / kappa;
+        let zz_next = zz + 2.0 * alpha * zd + alpha * alpha * dd;
+        if kappa <= 0.0 || zz_next >= radius * radius {
+            let tau = to_boundary(zz, zd, dd, radius);
+            for k in 0..n {
+                z[k] += tau * d[k];
+                hz[k] += tau * hd[k];
+            }
+            let zz_b = zz + 2.0 * tau * zd + tau * tau * dd;
+            return Some(done(z, &hz, zz_b, Termination::Boundary, rel));
+        }
+        for k in 0..n {
+            z[k] += alpha * d[k];
+            hz[k] += alpha * hd[k];
+            r[k] += alpha * hd[k];
+        }
+        zz = zz_next;
+        rel = dot(&r, &r).sqrt() / gnorm;
+        let rmax = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if rel <= stop.rtol || rmax <= stop.atol_max {
+            return Some(done(z, &hz, zz, Termination::Converged, rel));
+        }
+        y = precond.solve(&r).ok()?;
+        let ry_next = dot(&r, &y);
+        let beta = ry_next / ry;
+        ry = ry_next;
+        for k in 0..n {
+            d[k] = -y[k] + beta * d[k];
+        }
+        zd = beta * (zd + alpha * dd);
+        dd = ry + beta * beta * dd;
+    }
+    Some(done(z, &hz, zz, Termination::Budget, rel))
+}
