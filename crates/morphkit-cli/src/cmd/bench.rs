@@ -108,7 +108,7 @@ fn bent_tube(target: usize) -> ShapeSet {
 }
 
 fn springs_suite(data: Option<&Path>, steps: usize) -> anyhow::Result<Vec<serde_json::Value>> {
-    println!("physical blend, {steps} steps of α in [0, 1], default options (tolerance 1e-9 · k0)");
+    println!("physical blend, {steps} steps of α in [0, 1], default options (tolerance 1e-6 · k0)");
     println!(
         "{:<28} {:>7} {:>8} {:>9} {:>10} {:>7} {:>7} {:>7} {:>9}",
         "mesh", "verts", "springs", "setup ms", "ms/step", "newton", "factor", "cg", "peak MiB"
