@@ -1,25 +1,11 @@
-//! Inexact Newton steps by conjugate gradients preconditioned with a lagged Cholesky factor.
-//!
-//! Along an animation the Hessian changes little from one Newton step, or one frame, to the
-//! next. Instead of refactorizing at every step, the last factorization serves as a
-//! preconditioner for CG on the current Hessian (applied matrix-free, spring by spring). A
-//! triangular solve costs a small fraction of a factorization, so a handful of CG iterations is
-//! much cheaper than a new factor; when CG stalls, the caller refactorizes. This is the
-//! "previous factorization as a preconditioner" strategy named in the project issue.
+//! The spring Hessian as a matrix-free operator over the free coordinates, applied spring by
+//! spring from per-spring 3×3 blocks. The trust-region Newton–CG step ([`super::steihaug`])
+//! runs conjugate gradients with it, preconditioned by the last Cholesky factor, so that a
+//! handful of cheap triangular solves replaces most refactorizations along an animation (the
+//! "previous factorization as a preconditioner" strategy named in the project issue).
 
 use super::energy::Block;
 use super::SpringSet;
-use crate::sparse::Cholesky;
-
-/// Outcome of [`pcg`].
-pub(crate) enum PcgOutcome {
-    /// Converged to the requested relative residual.
-    Converged(Vec<f64>),
-    /// A direction of non-positive curvature was met: the operator is not positive definite.
-    NegativeCurvature,
-    /// The iteration budget ran out; the last iterate and its relative residual.
-    Stalled(Vec<f64>, f64),
-}
 
 /// Matrix-free product with the Hessian given by per-spring `blocks` over free coordinates.
 pub(crate) struct HessianOperator<'a> {
@@ -55,61 +41,4 @@ impl HessianOperator<'_> {
             }
         }
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// Solves `H x = b` to relative residual `rtol` in at most `max_iter` iterations.
-pub(crate) fn pcg(
-    op: &HessianOperator<'_>,
-    precond: &Cholesky,
-    b: &[f64],
-    rtol: f64,
-    max_iter: usize,
-    iterations: &mut usize,
-) -> PcgOutcome {
-    let n = b.len();
-    let mut full = vec![0.0; op.dof_index.len()];
-    let mut x = vec![0.0; n];
-    let mut r = b.to_vec();
-    let bnorm = dot(b, b).sqrt();
-    if bnorm == 0.0 {
-        return PcgOutcome::Converged(x);
-    }
-    let Ok(mut z) = precond.solve(&r) else {
-        return PcgOutcome::Stalled(x, 1.0);
-    };
-    let mut p = z.clone();
-    let mut rz = dot(&r, &z);
-    let mut hp = vec![0.0; n];
-    for _ in 0..max_iter {
-        *iterations += 1;
-        op.apply(&p, &mut full, &mut hp);
-        let php = dot(&p, &hp);
-        if php <= 0.0 || !php.is_finite() {
-            return PcgOutcome::NegativeCurvature;
-        }
-        let alpha = rz / php;
-        for k in 0..n {
-            x[k] += alpha * p[k];
-            r[k] -= alpha * hp[k];
-        }
-        if dot(&r, &r).sqrt() <= rtol * bnorm {
-            return PcgOutcome::Converged(x);
-        }
-        z = match precond.solve(&r) {
-            Ok(z) => z,
-            Err(_) => return PcgOutcome::Stalled(x, 1.0),
-        };
-        let rz_new = dot(&r, &z);
-        let beta = rz_new / rz;
-        rz = rz_new;
-        for k in 0..n {
-            p[k] = z[k] + beta * p[k];
-        }
-    }
-    let rel = dot(&r, &r).sqrt() / bnorm;
-    PcgOutcome::Stalled(x, rel)
 }

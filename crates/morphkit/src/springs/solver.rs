@@ -26,7 +26,7 @@
 
 use super::constraints::{Constraints, FixedVertices};
 use super::energy::{for_each_block, gradient};
-use super::pcg::{pcg, HessianOperator, PcgOutcome};
+use super::pcg::HessianOperator;
 use super::steihaug::{steihaug, StopRule, Termination};
 use super::{BlendError, RestLengths, SpringOptions, SpringSet, StiffnessRule, Weights};
 use crate::geom::kabsch;
@@ -599,37 +599,6 @@ impl PhysicalBlend {
         for (k, &i) in self.dof_index.iter().enumerate() {
             if i != u32::MAX {
                 rhs[i as usize] = -g[k];
-            }
-        }
-        if let (LinearSolver::LaggedPcg, Some(mu)) = (self.options.linear_solver, self.factor_shift)
-        {
-            let op = HessianOperator {
-                springs: &self.springs,
-                blocks: &self.blocks,
-                dof_index: &self.dof_index,
-                mu,
-            };
-            // Worth as many CG iterations as a factorization costs (measured), within bounds.
-            let budget =
-                (0.7 * self.timing.factor / self.timing.cg.max(1e-9)).clamp(8.0, 200.0) as usize;
-            let t = Instant::now();
-            let before = stats.cg_iterations;
-            let outcome = pcg(
-                &op,
-                &self.chol,
-                &rhs,
-                1e-3,
-                budget,
-                &mut stats.cg_iterations,
-            );
-            let done = (stats.cg_iterations - before).max(1) as f64;
-            self.timing.cg = 0.5 * self.timing.cg + 0.5 * t.elapsed().as_secs_f64() / done;
-            match outcome {
-                PcgOutcome::Converged(step) => return Ok(Some(step)),
-                // A truncated CG iterate is still a descent direction; use it if it got far.
-                PcgOutcome::Stalled(step, rel) if rel < 0.1 => return Ok(Some(step)),
-                PcgOutcome::NegativeCurvature if exact => return Ok(None),
-                _ => {}
             }
         }
         if !self.factorize_blocks(exact, stats)? {
