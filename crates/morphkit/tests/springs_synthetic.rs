@@ -232,7 +232,8 @@ fn bad_input_gives_errors_or_documented_outcomes() {
     let r = blend(&s, &Weights::Alpha(0.5), &opts).unwrap();
     assert!(!r.stats.converged);
     assert!(r.positions.iter().flatten().all(|v| v.is_finite()));
-    assert!(r.stats.gradient_norm < 1e-6);
+    assert!(r.stats.gradient_norm.is_finite());
+    assert!(!r.stats.unconverged_vertices.is_empty());
     // Extreme delta weights drive rest lengths negative: clamped and reported.
     let r = blend(&s, &Weights::Delta(vec![-30.0]), &BlendOptions::default()).unwrap();
     assert!(r.stats.clamped_springs > 0);
@@ -254,7 +255,7 @@ fn solver_variants_agree() {
     let s = bent_bar();
     let d = bbox_diagonal(s.positions(0));
     let mut results = Vec::new();
-    for linear_solver in [LinearSolver::Direct, LinearSolver::LaggedPcg] {
+    for linear_solver in [LinearSolver::Direct, LinearSolver::TrustRegion] {
         for ordering in [FillOrdering::Amd, FillOrdering::NestedDissection] {
             let opts = BlendOptions {
                 linear_solver,

@@ -29,6 +29,9 @@ pub struct BenchArgs {
     /// Write the measurements as JSON.
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Threads solving frames in parallel (frames are independent; results do not change).
+    #[arg(long, default_value_t = 1)]
+    threads: usize,
 }
 
 fn peak_rss_mib() -> Option<f64> {
@@ -39,7 +42,12 @@ fn peak_rss_mib() -> Option<f64> {
 }
 
 /// Times one 36-step sequence and prints a table row.
-fn time_sequence(name: &str, shapes: &ShapeSet, steps: usize) -> anyhow::Result<serde_json::Value> {
+fn time_sequence(
+    name: &str,
+    shapes: &ShapeSet,
+    steps: usize,
+    threads: usize,
+) -> anyhow::Result<serde_json::Value> {
     let t0 = Instant::now();
     let mut solver = PhysicalBlend::new(shapes, &BlendOptions::default())?;
     let setup = t0.elapsed().as_secs_f64();
@@ -48,10 +56,18 @@ fn time_sequence(name: &str, shapes: &ShapeSet, steps: usize) -> anyhow::Result<
     let mut cgs = 0;
     let mut worst_grad: f64 = 0.0;
     let mut all_converged = true;
+    let n = shapes.len() - 1;
+    let weights: Vec<Weights> = (0..steps)
+        .map(|k| {
+            let a = k as f64 / (steps.max(2) - 1) as f64;
+            let mut w = vec![0.0; n];
+            w[n - 1] = a;
+            Weights::Delta(w)
+        })
+        .collect();
     let t1 = Instant::now();
-    for k in 0..steps {
-        let a = k as f64 / (steps.max(2) - 1) as f64;
-        let r = solver.solve(&Weights::Alpha(a))?;
+    for r in solver.solve_many(&weights, threads) {
+        let r = r?;
         iters += r.stats.newton_iterations;
         facts += r.stats.factorizations;
         cgs += r.stats.cg_iterations;
@@ -62,7 +78,7 @@ fn time_sequence(name: &str, shapes: &ShapeSet, steps: usize) -> anyhow::Result<
     let row = json!({
         "mesh": name,
         "vertices": shapes.num_vertices(),
-        "springs": solver.springs().len(),
+        "springs": solver.summary().springs,
         "free_dofs": solver.num_free_dofs(),
         "factor_nnz": solver.factor_nnz(),
         "setup_ms": setup * 1e3,
@@ -73,12 +89,13 @@ fn time_sequence(name: &str, shapes: &ShapeSet, steps: usize) -> anyhow::Result<
         "all_converged": all_converged,
         "worst_gradient_over_tolerance": worst_grad,
         "peak_rss_mib": peak_rss_mib(),
+        "threads": threads,
     });
     println!(
         "{:<28} {:>7} {:>8} {:>9.1} {:>10.2} {:>7.2} {:>7.2} {:>7.1} {:>9}",
         name,
         shapes.num_vertices(),
-        solver.springs().len(),
+        solver.summary().springs,
         setup * 1e3,
         per_step * 1e3,
         iters as f64 / steps as f64,
@@ -107,15 +124,24 @@ fn bent_tube(target: usize) -> ShapeSet {
     .expect("generated shapes share connectivity")
 }
 
-fn springs_suite(data: Option<&Path>, steps: usize) -> anyhow::Result<Vec<serde_json::Value>> {
-    println!("physical blend, {steps} steps of α in [0, 1], default options (tolerance 1e-6 · k0)");
+fn springs_suite(
+    data: Option<&Path>,
+    steps: usize,
+    threads: usize,
+) -> anyhow::Result<Vec<serde_json::Value>> {
+    println!("physical blend, {steps} steps of α in [0, 1], default options (tolerance 1e-6 · k0), {threads} thread(s)");
     println!(
         "{:<28} {:>7} {:>8} {:>9} {:>10} {:>7} {:>7} {:>7} {:>9}",
         "mesh", "verts", "springs", "setup ms", "ms/step", "newton", "factor", "cg", "peak MiB"
     );
     let mut rows = Vec::new();
     for n in [2_200, 8_500, 18_600] {
-        rows.push(time_sequence(&format!("tube-{n}"), &bent_tube(n), steps)?);
+        rows.push(time_sequence(
+            &format!("tube-{n}"),
+            &bent_tube(n),
+            steps,
+            threads,
+        )?);
     }
     if let Some(dir) = data {
         let horse = [
@@ -123,7 +149,18 @@ fn springs_suite(data: Option<&Path>, steps: usize) -> anyhow::Result<Vec<serde_
             dir.join("sumner-horse-camel/horse-05.obj.gz"),
         ];
         let set = morphkit::io::read_shape_set(&horse)?;
-        rows.push(time_sequence("horse ref↔05 (8.4k)", &set, steps)?);
+        rows.push(time_sequence("horse ref↔05 (8.4k)", &set, steps, threads)?);
+        let ict = [
+            dir.join("ict-facekit/generic_neutral_mesh.obj.gz"),
+            dir.join("ict-facekit/jawOpen.obj.gz"),
+        ];
+        let set = morphkit::io::read_shape_set(&ict)?;
+        rows.push(time_sequence(
+            "ICT head↔jawOpen (26.7k)",
+            &set,
+            steps,
+            threads,
+        )?);
         let arm = morphkit::io::read_mesh(&dir.join("generic-meshes/armadillo.obj.gz"))?;
         let (lo, hi) = arm.bounding_box();
         let mid = 0.5 * (lo[0] + hi[0]);
@@ -135,9 +172,44 @@ fn springs_suite(data: Option<&Path>, steps: usize) -> anyhow::Result<Vec<serde_
                 ("bent".into(), bent),
             ],
         )?;
-        rows.push(time_sequence("armadillo bent 60° (14.6k)", &set, steps)?);
+        rows.push(time_sequence(
+            "armadillo bent 60° (14.6k)",
+            &set,
+            steps,
+            threads,
+        )?);
     }
     Ok(rows)
+}
+
+/// Memory of large grid blends: a 100k-vertex grid is set up and solved once (peak RSS
+/// reported); a 1M-vertex grid must be refused before it allocates, with its estimate.
+fn memory_suite() -> anyhow::Result<serde_json::Value> {
+    let mut rows = Vec::new();
+    for side in [316usize, 1000] {
+        let m = generate::grid(side - 1, side - 1, 1.0, 1.0);
+        let bent = generate::bend(&m.positions, 0.5, 0.5, 60f64.to_radians());
+        let set = ShapeSet::new(
+            m.clone(),
+            vec![("flat".into(), m.positions.clone()), ("bent".into(), bent)],
+        )?;
+        let t = Instant::now();
+        let row = match PhysicalBlend::new(&set, &BlendOptions::default()) {
+            Ok(mut solver) => {
+                let r = solver.solve(&Weights::Alpha(0.5))?;
+                json!({ "vertices": m.num_vertices(), "outcome": "solved",
+                        "converged": r.stats.converged,
+                        "predicted_mib": solver.summary().predicted_bytes as f64 / 1048576.0,
+                        "seconds": t.elapsed().as_secs_f64(), "peak_rss_mib": peak_rss_mib() })
+            }
+            Err(e) => json!({ "vertices": m.num_vertices(), "outcome": "refused",
+                              "message": e.to_string(), "seconds": t.elapsed().as_secs_f64(),
+                              "peak_rss_mib": peak_rss_mib() }),
+        };
+        println!("{row}");
+        rows.push(row);
+    }
+    Ok(json!(rows))
 }
 
 /// Runs `morphkit bench`.
@@ -146,9 +218,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         .data
         .clone()
         .or_else(|| std::env::var_os("MORPHKIT_DATA").map(PathBuf::from));
-    let mut report = json!({ "threads": 1 });
+    let mut report = json!({ "threads": args.threads });
     if matches!(args.suite.as_str(), "springs" | "all") {
-        report["springs"] = json!(springs_suite(data.as_deref(), args.steps)?);
+        report["springs"] = json!(springs_suite(data.as_deref(), args.steps, args.threads)?);
+    }
+    if matches!(args.suite.as_str(), "memory") {
+        report["memory"] = memory_suite()?;
     }
     if matches!(args.suite.as_str(), "transfer" | "all") {
         match data.as_deref() {
@@ -156,9 +231,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             None => println!("transfer suite skipped: it needs --data DIR or MORPHKIT_DATA (elephant, horse, camel)"),
         }
     }
-    if !matches!(args.suite.as_str(), "springs" | "transfer" | "all") {
+    if !matches!(
+        args.suite.as_str(),
+        "springs" | "transfer" | "memory" | "all"
+    ) {
         anyhow::bail!(
-            "unknown suite '{}': use springs, transfer or all",
+            "unknown suite '{}': use springs, transfer, memory or all",
             args.suite
         );
     }

@@ -14,7 +14,8 @@ use anyhow::{bail, Context};
 use morphkit::io::{self, FramesOptions};
 use morphkit::mesh::{ShapeSet, Topology};
 use morphkit::springs::{
-    blend_metrics, linear_blend, BlendOptions, FixedVertices, PhysicalBlend, SpringOptions, Weights,
+    blend_metrics, fold_metrics, linear_blend, BlendOptions, BlendResult, FixedVertices,
+    HingeOptions, PhysicalBlend, SpringOptions, Weights,
 };
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -32,7 +33,12 @@ Examples:
 OUT: a directory (no extension) gets frame_0000.obj, …; .glb/.gltf gets an animation; .pc2 a
 point cache; .obj/.ply/.off a single mesh (one frame only). --fixed FILE.json holds
 {\"fixed\": [vertex ids]} (0-based) or a bare array. Without fixed vertices, each connected
-component keeps only its rigid motion free and is aligned to the linear blend.";
+component keeps only its rigid motion free and is aligned to the linear blend.
+
+Each frame is the canonical equilibrium of its weights, solved from the linear blend: frames
+do not depend on each other, so --threads, frame order and repeated runs give the same bytes.
+A frame that does not converge is reported on stderr and in --report, and its failing
+vertices are written, coloured red, to OUT-unconverged.ply beside the output.";
 
 /// Most frames one call produces.
 const MAX_FRAMES: usize = 100_000;
@@ -77,6 +83,24 @@ pub struct BlendArgs {
     /// Convergence tolerance on the gradient, in units of k0 × strain.
     #[arg(long, default_value_t = 1e-6)]
     pub tolerance: f64,
+    /// Weight of the signed-hinge bending term relative to the springs (0 turns it off).
+    #[arg(long, default_value_t = 0.01)]
+    pub hinge_weight: f64,
+    /// Triangles stretched more than this factor between the base and a target follow the
+    /// linear blend (kinematic); `inf` turns this off.
+    #[arg(long, default_value_t = 15.0)]
+    pub kinematic_stretch: f64,
+    /// Refresh the Newton preconditioner every N iterations (0: only when it stalls). A speed
+    /// knob; results agree within the tolerance.
+    #[arg(long, default_value_t = 1)]
+    pub refactor_every: usize,
+    /// Refuse meshes whose solver would need more than this many GiB.
+    #[arg(long, default_value_t = 8.0)]
+    pub max_memory: f64,
+    /// Threads solving frames in parallel (default: the machine's cores). Results do not
+    /// depend on it.
+    #[arg(long)]
+    pub threads: Option<usize>,
     /// Frames per second of a glTF animation output.
     #[arg(long, default_value_t = 24.0)]
     pub fps: f64,
@@ -189,6 +213,39 @@ fn weights_json(w: &Weights) -> serde_json::Value {
     }
 }
 
+/// `OUT-unconverged.ply` beside `out`.
+fn unconverged_path(out: &Path) -> PathBuf {
+    let stem = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "blend".into());
+    let stem = stem.split('.').next().unwrap_or("blend").to_string();
+    out.with_file_name(format!("{stem}-unconverged.ply"))
+}
+
+/// Solves every frame (`None` per frame for the linear blend), in parallel chunks so that the
+/// progress bar moves.
+fn solve_frames(
+    solver: Option<&mut PhysicalBlend>,
+    weights: &[Weights],
+    threads: usize,
+    bar: &indicatif::ProgressBar,
+) -> anyhow::Result<Vec<Option<BlendResult>>> {
+    let Some(solver) = solver else {
+        bar.inc(weights.len() as u64);
+        return Ok(weights.iter().map(|_| None).collect());
+    };
+    let mut out = Vec::with_capacity(weights.len());
+    for (c, chunk) in weights.chunks(4 * threads).enumerate() {
+        for (k, r) in solver.solve_many(chunk, threads).into_iter().enumerate() {
+            let frame = c * 4 * threads + k;
+            out.push(Some(r.with_context(|| format!("frame {frame}"))?));
+        }
+        bar.inc(chunk.len() as u64);
+    }
+    Ok(out)
+}
+
 /// Runs `morphkit blend`.
 pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let start = Instant::now();
@@ -198,6 +255,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     if let Some(r) = &a.report {
         io::check_not_input(r, &inputs)?;
     }
+    io::check_not_input(&unconverged_path(&a.out), &inputs)?;
     let shapes = io::read_shape_set(&inputs)?;
     let weights = frame_weights(a, shapes.len())?;
     for (k, w) in weights.iter().enumerate() {
@@ -209,16 +267,30 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         bail!("{}: a single-mesh output holds one frame, but {} frames were asked for; use a directory, .glb or .pc2", a.out.display(), weights.len());
     }
     let topology = Topology::new(shapes.num_vertices(), shapes.triangles());
+    if !(a.max_memory.is_finite() && a.max_memory > 0.0) {
+        bail!("--max-memory must be a finite positive number of GiB");
+    }
     let options = BlendOptions {
         springs: SpringOptions {
             k0: a.k0,
             bending: !a.no_bending,
             ..Default::default()
         },
+        hinges: HingeOptions {
+            weight: a.hinge_weight,
+            ..Default::default()
+        },
         fixed: read_fixed(&a.fixed)?,
         gradient_tolerance: a.tolerance,
+        kinematic_stretch: a.kinematic_stretch,
+        refactor_every: a.refactor_every,
+        max_memory_bytes: (a.max_memory * (1u64 << 30) as f64) as u64,
         ..Default::default()
     };
+    let threads = a
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .clamp(1, 64);
     let t_setup = Instant::now();
     let mut solver = if a.linear {
         None
@@ -231,24 +303,32 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         weights.len() as u64,
         if a.linear { "linear" } else { "physical" },
     );
+    let results = solve_frames(solver.as_mut(), &weights, threads, &bar)?;
+    bar.finish_and_clear();
     let mut frames = Vec::with_capacity(weights.len());
     let mut rows = Vec::with_capacity(weights.len());
     let mut unconverged = Vec::new();
-    for (k, w) in weights.iter().enumerate() {
+    let mut failed = vec![false; shapes.num_vertices()];
+    let mut clamped = 0;
+    for (k, (w, r)) in weights.iter().zip(results).enumerate() {
         let linear = linear_blend(&shapes, w)?;
         let mut row = json!({ "frame": k, "weights": weights_json(w) });
         if a.report.is_some() {
             row["linear"] = json!(blend_metrics(&shapes, &topology, w, &linear)?);
         }
-        let positions = match solver.as_mut() {
+        let positions = match r {
             None => linear,
-            Some(s) => {
-                let r = s.solve(w).with_context(|| format!("frame {k}"))?;
+            Some(r) => {
                 if !r.stats.converged {
                     unconverged.push(k);
+                    for &v in &r.stats.unconverged_vertices {
+                        failed[v as usize] = true;
+                    }
                 }
+                clamped = clamped.max(r.stats.clamped_springs);
                 if a.report.is_some() {
                     row["physical"] = json!(blend_metrics(&shapes, &topology, w, &r.positions)?);
+                    row["folds"] = json!(fold_metrics(&shapes, &topology, w, &r.positions)?);
                 }
                 row["solver"] = json!(r.stats);
                 r.positions
@@ -259,17 +339,26 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         }
         frames.push((format!("frame_{k:04}"), positions));
         rows.push(row);
-        bar.inc(1);
     }
-    bar.finish_and_clear();
-    if !unconverged.is_empty() {
+    if clamped > 0 {
+        eprintln!("warning: extreme weights clamped the rest lengths of up to {clamped} springs in a frame (see --report)");
+    }
+    let failed_ply = (!unconverged.is_empty()).then(|| unconverged_path(&a.out));
+    if let Some(path) = &failed_ply {
+        let count = failed.iter().filter(|f| **f).count();
         eprintln!(
-            "warning: {} of {} frames did not reach the gradient tolerance {} (frames {:?}); see --report for their gradient norms",
+            "warning: {} of {} frames did not converge (frames {:?}{}); {count} vertices fail, shown red in {}",
             unconverged.len(),
             weights.len(),
-            a.tolerance,
-            &unconverged[..unconverged.len().min(10)]
+            &unconverged[..unconverged.len().min(10)],
+            if unconverged.len() > 10 { ", …" } else { "" },
+            path.display()
         );
+        let colors = failed
+            .iter()
+            .map(|&f| if f { [220, 30, 30] } else { [200, 200, 200] })
+            .collect();
+        io::write_ply_colored(path, shapes.base(), &io::Colors::PerVertex(colors))?;
     }
     let out_set = ShapeSet::new(shapes.base().clone(), frames)?;
     let t_write = Instant::now();
@@ -294,9 +383,13 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
             "output": a.out.display().to_string(),
             "vertices": shapes.num_vertices(),
             "triangles": shapes.triangles().len(),
-            "springs": solver.as_ref().map(|s| s.springs().len()),
+            "springs": solver.as_ref().map(|s| s.summary().springs),
+            "rig": solver.as_ref().map(|s| s.summary().clone()),
             "free_dofs": solver.as_ref().map(|s| s.num_free_dofs()),
             "fixed_vertices": solver.as_ref().map(|s| s.constraints().fixed.len()),
+            "threads": threads,
+            "unconverged_frames": unconverged,
+            "unconverged_region": failed_ply.as_ref().map(|p| p.display().to_string()),
             "timings": { "setup_seconds": setup_seconds, "write_seconds": write_seconds, "total_seconds": start.elapsed().as_secs_f64() },
             "frames": rows,
         });

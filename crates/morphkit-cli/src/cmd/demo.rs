@@ -87,7 +87,7 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
     );
     println!(
         "  {} springs, {} fixed vertices (the straight half does not move); set-up {:.1} ms, solve {:.1} ms, {} Newton iterations, converged: {}",
-        solver.springs().len(),
+        solver.summary().springs,
         solver.constraints().fixed.len(),
         setup.as_secs_f64() * 1e3,
         phys.stats.seconds * 1e3,
@@ -120,7 +120,6 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
     write("physical-0.5", &phys.positions)?;
 
     let t1 = Instant::now();
-    solver.reset();
     let n = 36;
     let (mut phys_frames, mut lin_frames) = (Vec::new(), Vec::new());
     for k in 0..n {

@@ -8,6 +8,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side, Spec};
+use std::sync::Arc;
 
 /// The lower-triangle sparsity pattern of a symmetric `n × n` matrix, compressed by column,
 /// row indices sorted. Values live outside, in a `Vec<f64>` with one slot per stored entry.
@@ -99,6 +100,13 @@ impl SymmetricPattern {
     /// `y = A x` for the symmetric matrix with these `values`.
     pub fn mul_vec(&self, values: &[f64], x: &[f64]) -> Vec<f64> {
         let mut y = vec![0.0; self.n];
+        self.mul_vec_into(values, x, &mut y);
+        y
+    }
+
+    /// `y = A x` into a caller's buffer (length `n`).
+    pub fn mul_vec_into(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
+        y.iter_mut().for_each(|v| *v = 0.0);
         for c in 0..self.n {
             for k in self.col_ptr[c]..self.col_ptr[c + 1] {
                 let r = self.row_idx[k];
@@ -108,7 +116,6 @@ impl SymmetricPattern {
                 }
             }
         }
-        y
     }
 
     fn symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
@@ -134,10 +141,12 @@ pub enum Ordering {
 /// [`Cholesky::factorize`] may then be called any number of times with new values of the same
 /// pattern, and [`Cholesky::solve_in_place`] solves for any number of right-hand sides.
 pub struct Cholesky {
-    pattern: SymmetricPattern,
-    symbolic: SymbolicCholesky<usize>,
+    pattern: Arc<SymmetricPattern>,
+    symbolic: Arc<SymbolicCholesky<usize>>,
     l_values: Vec<f64>,
     factor_scratch: MemBuffer,
+    /// Scratch of single right-hand-side solves ([`Cholesky::solve_one`]).
+    solve_scratch: MemBuffer,
     factored: bool,
 }
 
@@ -153,6 +162,14 @@ impl std::fmt::Debug for Cholesky {
 impl Cholesky {
     /// Symbolic analysis of `pattern`.
     pub fn analyze(pattern: SymmetricPattern, ordering: Ordering) -> Result<Self, SolveError> {
+        let symbolic = Self::analyze_symbolic(&pattern, ordering)?;
+        Self::with_buffers(Arc::new(pattern), Arc::new(symbolic))
+    }
+
+    fn analyze_symbolic(
+        pattern: &SymmetricPattern,
+        ordering: Ordering,
+    ) -> Result<SymbolicCholesky<usize>, SolveError> {
         let n = pattern.n();
         let (fwd, inv);
         // faer 0.24's `SymmetricOrdering::Identity` analyses a lower-triangle input as if it
@@ -190,20 +207,85 @@ impl Cholesky {
                 SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(&fwd, &inv, n))
             }
         };
-        let symbolic =
-            factorize_symbolic_cholesky(pattern.symbolic(), Side::Lower, ord, Default::default())
-                .map_err(|e| SolveError::Backend(format!("{e:?}")))?;
-        let l_values = vec![0.0; symbolic.len_val()];
+        factorize_symbolic_cholesky(pattern.symbolic(), Side::Lower, ord, Default::default())
+            .map_err(|e| SolveError::Backend(format!("{e:?}")))
+    }
+
+    fn with_buffers(
+        pattern: Arc<SymmetricPattern>,
+        symbolic: Arc<SymbolicCholesky<usize>>,
+    ) -> Result<Self, SolveError> {
+        let oom = |_| SolveError::Backend("out of memory".into());
+        let mut l_values = Vec::new();
+        l_values
+            .try_reserve_exact(symbolic.len_val())
+            .map_err(|_| SolveError::Backend("out of memory for the factor".into()))?;
+        l_values.resize(symbolic.len_val(), 0.0);
         let req = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
-        let factor_scratch =
-            MemBuffer::try_new(req).map_err(|_| SolveError::Backend("out of memory".into()))?;
+        let factor_scratch = MemBuffer::try_new(req).map_err(oom)?;
+        let req = symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);
+        let solve_scratch = MemBuffer::try_new(req).map_err(oom)?;
         Ok(Self {
             pattern,
             symbolic,
             l_values,
             factor_scratch,
+            solve_scratch,
             factored: false,
         })
+    }
+
+    /// Number of stored entries the factor of `pattern` would have under `ordering`, from the
+    /// symbolic analysis alone (no numeric storage is allocated): a memory estimate.
+    pub fn predicted_factor_nnz(
+        pattern: &SymmetricPattern,
+        ordering: Ordering,
+    ) -> Result<usize, SolveError> {
+        let analysed = Self::analyze_symbolic(pattern, ordering)?;
+        Ok(analysed.len_val())
+    }
+
+    /// A second solver for the same pattern sharing this one's symbolic analysis, with buffers
+    /// of its own (one per thread).
+    pub fn share_symbolic(&self) -> Result<Self, SolveError> {
+        Self::with_buffers(self.pattern.clone(), self.symbolic.clone())
+    }
+
+    /// Solves $A x = b$ in place for one right-hand side, with no allocation.
+    pub fn solve_one(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
+        self.check_rhs(rhs, 1)?;
+        let llt = LltRef::new(&self.symbolic, &self.l_values);
+        let n = self.pattern.n();
+        let mat = MatMut::from_column_major_slice_mut(rhs, n, 1);
+        llt.solve_in_place_with_conj(
+            Conj::No,
+            mat,
+            Par::Seq,
+            MemStack::new(&mut self.solve_scratch),
+        );
+        Ok(())
+    }
+
+    fn check_rhs(&self, rhs: &[f64], ncols: usize) -> Result<(), SolveError> {
+        let n = self.pattern.n();
+        if !self.factored {
+            return Err(SolveError::Backend(
+                "solve called before a successful factorization".into(),
+            ));
+        }
+        if rhs.len() != n * ncols {
+            return Err(SolveError::Dimension {
+                what: "right-hand side",
+                expected: n * ncols,
+                found: rhs.len(),
+            });
+        }
+        if rhs.iter().any(|v| !v.is_finite()) {
+            return Err(SolveError::NonFinite {
+                what: "right-hand side",
+            });
+        }
+        Ok(())
     }
 
     /// The pattern this solver was analysed for.
@@ -260,23 +342,7 @@ impl Cholesky {
     /// (`n × ncols`).
     pub fn solve_in_place(&self, rhs: &mut [f64], ncols: usize) -> Result<(), SolveError> {
         let n = self.pattern.n();
-        if !self.factored {
-            return Err(SolveError::Backend(
-                "solve called before a successful factorization".into(),
-            ));
-        }
-        if rhs.len() != n * ncols {
-            return Err(SolveError::Dimension {
-                what: "right-hand side",
-                expected: n * ncols,
-                found: rhs.len(),
-            });
-        }
-        if rhs.iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::NonFinite {
-                what: "right-hand side",
-            });
-        }
+        self.check_rhs(rhs, ncols)?;
         let req = self.symbolic.solve_in_place_scratch::<f64>(ncols, Par::Seq);
         let mut buf =
             MemBuffer::try_new(req).map_err(|_| SolveError::Backend("out of memory".into()))?;

@@ -35,8 +35,11 @@ pub enum FixedVertices {
 /// The resolved constraints of a shape set.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Constraints {
-    /// Fully fixed vertices (user-given or automatic), sorted.
+    /// Fully fixed vertices (user-given, automatic or kinematic), sorted. Their positions are
+    /// the linear interpolation of their positions in the shapes.
     pub fixed: Vec<u32>,
+    /// The kinematic vertices among them (over-stretched triangles), sorted.
+    pub kinematic: Vec<u32>,
     /// Components held only by the gauge, to align after each solve.
     pub gauges: Vec<Gauge>,
     /// Per degree of freedom (`3 #V`): fixed by a boundary condition or by the gauge.
@@ -44,11 +47,15 @@ pub struct Constraints {
 }
 
 impl Constraints {
-    /// Resolves `spec` for `shapes` with connectivity `topology`.
+    /// Resolves `spec` for `shapes` with connectivity `topology`. `kinematic` vertices (see
+    /// [`stretched_vertices`]) are held like automatic ones: where they, with the other fixed
+    /// vertices of their component, span a plane they follow the linear blend; otherwise that
+    /// component keeps its gauge and they are solved for.
     pub fn new(
         shapes: &ShapeSet,
         topology: &Topology,
         spec: &FixedVertices,
+        kinematic: &[u32],
     ) -> Result<Self, BlendError> {
         let n = shapes.num_vertices();
         let base = shapes.positions(0);
@@ -78,6 +85,12 @@ impl Constraints {
                 }
             }
         }
+        let mut is_kinematic = vec![false; n];
+        for &v in kinematic {
+            if (v as usize) < n && !is_fixed[v as usize] {
+                is_kinematic[v as usize] = true;
+            }
+        }
         let comp = topology.components();
         let mut members: Vec<Vec<u32>> = vec![Vec::new(); topology.num_components()];
         for v in 0..n {
@@ -92,8 +105,18 @@ impl Constraints {
                 .filter(|&&v| is_fixed[v as usize])
                 .map(|&v| base[v as usize])
                 .collect();
-            if spans_plane(&fixed_here, 1e-9 * diag) {
+            let held: Vec<Point> = verts
+                .iter()
+                .filter(|&&v| is_fixed[v as usize] || is_kinematic[v as usize])
+                .map(|&v| base[v as usize])
+                .collect();
+            if spans_plane(&fixed_here, 1e-9 * diag)
+                || (!explicit_here(explicit, &fixed_here) && spans_plane(&held, 1e-9 * diag))
+            {
                 continue;
+            }
+            for &v in verts {
+                is_kinematic[v as usize] = false;
             }
             if !fixed_here.is_empty() {
                 if explicit {
@@ -120,7 +143,12 @@ impl Constraints {
                 }
             }
         }
-        let fixed: Vec<u32> = (0..n as u32).filter(|&v| is_fixed[v as usize]).collect();
+        let kinematic: Vec<u32> = (0..n as u32)
+            .filter(|&v| is_kinematic[v as usize])
+            .collect();
+        let fixed: Vec<u32> = (0..n as u32)
+            .filter(|&v| is_fixed[v as usize] || is_kinematic[v as usize])
+            .collect();
         for &v in &fixed {
             for a in 0..3 {
                 fixed_dof[3 * v as usize + a] = true;
@@ -128,6 +156,7 @@ impl Constraints {
         }
         Ok(Self {
             fixed,
+            kinematic,
             gauges,
             fixed_dof,
         })
@@ -137,6 +166,61 @@ impl Constraints {
     pub fn num_free_dofs(&self) -> usize {
         self.fixed_dof.iter().filter(|f| !**f).count()
     }
+}
+
+/// Explicit ids that do not span a plane in a component are an error (raised by the caller);
+/// kinematic vertices are then not added to them.
+fn explicit_here(explicit: bool, fixed_here: &[Point]) -> bool {
+    explicit && !fixed_here.is_empty()
+}
+
+/// Vertices of triangles whose in-plane stretch between the base and some shape exceeds
+/// `threshold`: $\max(\sigma_{\max}, 1/\sigma_{\min}) >$ `threshold`, with $\sigma$ the
+/// singular values of the triangle's 2D deformation (from the metric tensors $G_0 = E_0^	op E_0$,
+/// $G_s = E_s^	op E_s$ of the edge matrices). A triangle that is a sliver in the base and opens
+/// in a target (a closed slit) counts as infinitely stretched.
+pub fn stretched_vertices(shapes: &ShapeSet, threshold: f64) -> Vec<u32> {
+    if !threshold.is_finite() {
+        return Vec::new();
+    }
+    let base = shapes.positions(0);
+    let metric = |p: &[Point], t: [u32; 3]| {
+        let e1 = sub(p[t[1] as usize], p[t[0] as usize]);
+        let e2 = sub(p[t[2] as usize], p[t[0] as usize]);
+        let d = crate::mesh::dot;
+        [d(e1, e1), d(e1, e2), d(e2, e2)]
+    };
+    let mut mark = vec![false; shapes.num_vertices()];
+    for &t in shapes.triangles() {
+        let g0 = metric(base, t);
+        let det0 = g0[0] * g0[2] - g0[1] * g0[1];
+        let tr0 = g0[0] + g0[2];
+        let stretched = (1..shapes.len()).any(|s| {
+            let g = metric(shapes.positions(s), t);
+            let det = g[0] * g[2] - g[1] * g[1];
+            if det0 <= 1e-12 * tr0 * tr0 {
+                // A sliver in the base: stretched when it opens up in this shape.
+                return det > 1e-6 * (g[0] + g[2]).powi(2) && tr0 < (g[0] + g[2]);
+            }
+            // Eigenvalues of G0⁻¹ G are the squared singular values.
+            let m = [
+                (g0[2] * g[0] - g0[1] * g[1]) / det0,
+                (g0[0] * g[2] - g0[1] * g[1]) / det0,
+            ];
+            let tr = m[0] + m[1];
+            let dt = det / det0;
+            let disc = (0.25 * tr * tr - dt).max(0.0).sqrt();
+            0.5 * tr + disc > threshold * threshold
+        });
+        if stretched {
+            for v in t {
+                mark[v as usize] = true;
+            }
+        }
+    }
+    (0..mark.len() as u32)
+        .filter(|&v| mark[v as usize])
+        .collect()
 }
 
 /// True when the points are not all within `tol` of one line.
@@ -236,21 +320,42 @@ impl Gauge {
         }
     }
 
+    /// The solver frame for positions `p` of the component: rows $\widehat{b - a}$,
+    /// $e_2$, $\widehat{e_1 \times (c - a)}$ as in the type's doc, or the base frame when
+    /// `a`, `b`, `c` are (nearly) collinear in `p`.
+    pub fn frame_for(&self, p: &[Point]) -> [[f64; 3]; 3] {
+        let [a, b, c] = self.pinned.map(|v| p[v as usize]);
+        let d = sub(b, a);
+        let ld = norm(d);
+        let n = cross(d, sub(c, a));
+        let ln = norm(n);
+        if ld <= 0.0 || ln <= 1e-9 * ld * ld {
+            return self.frame;
+        }
+        let e1 = [d[0] / ld, d[1] / ld, d[2] / ld];
+        let e3 = [n[0] / ln, n[1] / ln, n[2] / ln];
+        [e1, cross(e3, e1), e3]
+    }
+
     /// The pinned `(vertex, axis)` pairs, axes in solver coordinates.
     pub fn pins(&self) -> [(u32, usize); 6] {
         let [a, b, c] = self.pinned;
         [(a, 0), (a, 1), (a, 2), (b, 1), (b, 2), (c, 2)]
     }
 
-    /// World → solver coordinates.
+    /// World → solver coordinates in the base frame.
     pub fn to_solver(&self, q: Point) -> Point {
-        let f = &self.frame;
-        [
-            crate::mesh::dot(f[0], q),
-            crate::mesh::dot(f[1], q),
-            crate::mesh::dot(f[2], q),
-        ]
+        rotate_into(&self.frame, q)
     }
+}
+
+/// `f q` for a frame `f` given by its rows.
+pub fn rotate_into(f: &[[f64; 3]; 3], q: Point) -> Point {
+    [
+        crate::mesh::dot(f[0], q),
+        crate::mesh::dot(f[1], q),
+        crate::mesh::dot(f[2], q),
+    ]
 }
 
 #[cfg(test)]
@@ -274,11 +379,11 @@ mod tests {
             generate::rotate(&m.positions, [0.0; 3], [0.0, 0.0, 1.0], 1.0),
         );
         let t = Topology::new(m.num_vertices(), &m.triangles);
-        let c = Constraints::new(&s, &t, &FixedVertices::None).unwrap();
+        let c = Constraints::new(&s, &t, &FixedVertices::None, &[]).unwrap();
         assert_eq!(c.fixed_dof.iter().filter(|f| **f).count(), 6);
         assert_eq!(c.gauges.len(), 1);
         // Auto finds the two poles on the rotation axis: collinear, so ignored.
-        let c = Constraints::new(&s, &t, &FixedVertices::Auto).unwrap();
+        let c = Constraints::new(&s, &t, &FixedVertices::Auto, &[]).unwrap();
         assert_eq!(c.fixed_dof.iter().filter(|f| **f).count(), 6);
         assert!(c.fixed.is_empty());
     }
@@ -288,12 +393,12 @@ mod tests {
         let m = generate::tube(0.5, 4.0, 8, 8, false);
         let s = set_of(&m, generate::bend(&m.positions, 2.0, 2.0, 1.5));
         let t = Topology::new(m.num_vertices(), &m.triangles);
-        let c = Constraints::new(&s, &t, &FixedVertices::Auto).unwrap();
+        let c = Constraints::new(&s, &t, &FixedVertices::Auto, &[]).unwrap();
         assert_eq!(c.fixed.len(), 5 * 8, "rings at x ≤ 2 do not move");
         assert!(c.gauges.is_empty());
-        let e = Constraints::new(&s, &t, &FixedVertices::Ids(vec![0, 8])).unwrap_err();
+        let e = Constraints::new(&s, &t, &FixedVertices::Ids(vec![0, 8]), &[]).unwrap_err();
         assert!(matches!(e, BlendError::UnderConstrained { fixed: 2, .. }));
-        let e = Constraints::new(&s, &t, &FixedVertices::Ids(vec![0, 9999])).unwrap_err();
+        let e = Constraints::new(&s, &t, &FixedVertices::Ids(vec![0, 9999]), &[]).unwrap_err();
         assert!(matches!(
             e,
             BlendError::FixedOutOfRange { vertex: 9999, .. }

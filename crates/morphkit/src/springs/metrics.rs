@@ -109,3 +109,98 @@ pub fn blend_metrics(
         volume_ratio,
     })
 }
+
+/// Fold, crease and distance measures of a blended shape (blend-design §2), each also
+/// computed for the linear blend so that the two can be compared.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct FoldMetrics {
+    /// Triangles whose normal turns more than 120° away from their normal in *every* shape
+    /// with a non-zero coefficient (a triangle that legitimately turns 170° between two shapes
+    /// lags behind one of them, not both).
+    pub folds: usize,
+    /// The same count for the linear blend.
+    pub folds_linear: usize,
+    /// Interior edges whose signed dihedral angle is more than 30° off the blended angle.
+    pub creases: usize,
+    /// The same count for the linear blend.
+    pub creases_linear: usize,
+    /// Largest distance of a vertex from its linear blend.
+    pub max_from_linear: f64,
+    /// Largest distance any vertex moves between two of the shapes in the blend (the base
+    /// and every shape with a non-zero coefficient).
+    pub largest_move: f64,
+}
+
+/// Counts folds and creases of `positions` and of the linear blend for `weights`.
+pub fn fold_metrics(
+    shapes: &ShapeSet,
+    topology: &Topology,
+    weights: &Weights,
+    positions: &[Point],
+) -> Result<FoldMetrics, BlendError> {
+    let c = weights.coefficients(shapes.len())?;
+    let lin = linear_blend(shapes, weights)?;
+    let active: Vec<usize> = (0..shapes.len()).filter(|&s| c[s] != 0.0).collect();
+    let folds = |p: &[Point]| {
+        shapes
+            .triangles()
+            .iter()
+            .filter(|&&t| {
+                let n = triangle_normal(p, t);
+                let ln = norm(n);
+                ln > 0.0
+                    && active.iter().all(|&s| {
+                        let m = triangle_normal(shapes.positions(s), t);
+                        let lm = norm(m);
+                        lm > 0.0 && crate::mesh::dot(n, m) < -0.5 * ln * lm
+                    })
+            })
+            .count()
+    };
+    let hinges = super::terms::HingeTerm::new(
+        shapes,
+        topology,
+        &super::terms::HingeOptions {
+            weight: 1.0,
+            ..Default::default()
+        },
+        1.0,
+        1.0,
+    );
+    let target = hinges.blended_angles(&c);
+    let creases = |p: &[Point]| {
+        let x: Vec<f64> = p.iter().flatten().copied().collect();
+        (0..hinges.len())
+            .filter(|&k| {
+                let mut d = hinges.angle_at(&x, k) - target[k];
+                d -= std::f64::consts::TAU * (d / std::f64::consts::TAU).round();
+                d.abs() > 30f64.to_radians()
+            })
+            .count()
+    };
+    let dist = |a: Point, b: Point| norm(sub(a, b));
+    let max_from_linear = positions
+        .iter()
+        .zip(&lin)
+        .fold(0.0f64, |m, (p, q)| m.max(dist(*p, *q)));
+    let mut largest_move = 0.0f64;
+    let mut involved = active.clone();
+    if !involved.contains(&0) {
+        involved.insert(0, 0);
+    }
+    for (k, &s) in involved.iter().enumerate() {
+        for &t in &involved[k + 1..] {
+            for (p, q) in shapes.positions(s).iter().zip(shapes.positions(t)) {
+                largest_move = largest_move.max(dist(*p, *q));
+            }
+        }
+    }
+    Ok(FoldMetrics {
+        folds: folds(positions),
+        folds_linear: folds(&lin),
+        creases: creases(positions),
+        creases_linear: creases(&lin),
+        max_from_linear,
+        largest_move,
+    })
+}

@@ -1,43 +1,74 @@
 //! Physical blendshapes: rest-length interpolation of a mass–spring system solved to
 //! equilibrium (Ma et al. 2012, Sec. 3.1–3.3 and 3.5; corrected Hessian from the project's
-//! math notes §1).
+//! math notes §1), made robust on real rigs.
 //!
 //! Each blendshape target defines the rest lengths of one spring system over the shared
 //! connectivity: *structure springs* on every edge and *bending springs* between vertices at
 //! graph distance exactly two (Sec. 3.1). Blending interpolates the rest lengths,
-//! $\bar r_q = \sum_i w_i r_q^i$ (Eq. 1, Sec. 3.3), and the blended shape is the equilibrium of
+//! $\bar r_q = \sum_s c_s r_q^s$ (Eq. 1, Sec. 3.3), and the blended shape is an equilibrium of
 //!
-//! $$E(x) = \sum_q \tfrac12 k_q (\lVert x_i - x_j \rVert - \bar r_q)^2, \qquad k_q = k_0 / \bar r_q
-//! \text{ (Sec. 3.5)},$$
+//! $$E(x) = \sum_q \tfrac12 k_q (\lVert x_i - x_j \rVert - \bar r_q)^2 + E_{\text{hinge}}(x),
+//! \qquad k_q = k_0 / \bar r_q \text{ (Sec. 3.5)},$$
 //!
-//! found by projected Newton with a backtracking line search ([`PhysicalBlend`]).
+//! where $E_{\text{hinge}}$ ([`terms::HingeTerm`]) is a weak signed-dihedral term that the paper
+//! does not have: distance springs cannot tell a fold up from a fold down, so without it thin
+//! regions of real meshes (lips, eyelids, ears) mirror themselves and crumple.
+//!
+//! # The canonical equilibrium
+//!
+//! Rest-length blending makes $E$ non-convex, with many local minima, so "the equilibrium" is
+//! only defined together with the procedure that finds it. morphkit defines the blend for
+//! weights $w$ (affine coefficients $c(w)$, $\sum_s c_s = 1$) as
+//!
+//! > $x^*(w)$ = the minimiser reached by the deterministic trust-region Newton iteration of
+//! > [`newton`](self) (fixed budgets, schedules and tolerances, no timing) started from the
+//! > predictor $P(w)$ = the linear blend $\sum_s c_s x^s$ (rigidly re-framed for gauged
+//! > components), then each gauged component aligned rigidly to the linear blend.
+//!
+//! Consequences, each tested:
+//! - **Endpoints are exact.** At one-hot weights $P = x^s$, where every term has zero energy and
+//!   gradient: the solve takes zero iterations and returns shape $s$ (within round-off).
+//! - **A frame is a function of its weights alone.** No solve starts from, or reuses numbers of,
+//!   an earlier solve (the symbolic analysis and buffers are reused, never values), so frame
+//!   order, scrubbing back and forth, threads ([`PhysicalBlend::solve_many`]) and machine load
+//!   change no bit of the result. `--alpha a` equals the matching frame of `--frames`.
+//! - **Kinematic sheets.** Triangles stretched more than [`BlendOptions::kinematic_stretch`]
+//!   (default 15×) between the base and a target are no material: their vertices follow the
+//!   linear blend as boundary conditions, chosen once per rig.
+//! - **Failures are loud.** A solve that does not reach the tolerance returns
+//!   `converged = false` with the vertices whose residual force is above it.
 //!
 //! The pieces, one module each:
 //! - [`SpringSet`]: which springs exist ([`SpringOptions`]) and their rest lengths per target;
-//! - [`Weights`]: two-shape α, convex weights, or artist "delta" weights, resolved to one convex
-//!   combination of rest lengths with clamping;
-//! - [`energy`]: $E$, $\nabla E$ and the projected Hessian, per spring;
-//! - [`Constraints`]: fixed vertices (user-given or `auto`) and, where nothing is fixed, a
+//! - [`Weights`]: two-shape α, convex weights, or artist "delta" weights;
+//! - [`terms`]: the energy as a sum of [`terms::EnergyTerm`]s (springs, hinges; later internal
+//!   springs, anchors, pulls, contacts) writing into one block sparsity pattern;
+//! - [`Constraints`]: fixed, automatic and kinematic vertices and, where nothing is fixed, a
 //!   minimal gauge that removes only the rigid motions;
-//! - [`PhysicalBlend`] / [`blend`]: the stateful solver and its one-shot wrapper;
-//! - [`metrics`]: edge-length, area and volume measures used to compare with [`linear_blend`].
+//! - `predictor`, `system`, `newton`, `blender`: the predictor and output alignment, the
+//!   free-coordinate Newton system, the iterations, and [`PhysicalBlend`] / [`blend`];
+//! - [`metrics`]: edge-length, area, volume, fold and crease measures against
+//!   [`linear_blend`].
 
+mod blender;
 mod constraints;
-pub mod energy;
 pub mod metrics;
-mod pcg;
-mod solver;
+mod newton;
+mod options;
+mod predictor;
 mod spring_set;
 mod steihaug;
+mod system;
+pub mod terms;
 pub mod weights;
 
-pub use constraints::{Constraints, FixedVertices, Gauge};
-pub use metrics::{blend_metrics, linear_blend, BlendMetrics};
-pub use solver::{
-    blend, BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, PhysicalBlend,
-};
+pub use blender::{blend, PhysicalBlend};
+pub use constraints::{stretched_vertices, Constraints, FixedVertices, Gauge};
+pub use metrics::{blend_metrics, fold_metrics, linear_blend, BlendMetrics, FoldMetrics};
+pub use options::{BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, RigSummary};
 pub use spring_set::{Spring, SpringKind, SpringOptions, SpringSet, StiffnessRule};
-pub use weights::{RestLengths, Weights};
+pub use terms::HingeOptions;
+pub use weights::Weights;
 
 /// Why a blend could not be computed.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
@@ -104,9 +135,28 @@ pub enum BlendError {
     /// Options out of their valid range.
     #[error("invalid option: {0}")]
     InvalidOption(String),
-    /// Every spring was removed by the options.
-    #[error("the spring options select no springs")]
-    NoSprings,
+    /// No spring is left.
+    #[error("no springs to blend: {cause}")]
+    NoSprings {
+        /// Why.
+        cause: &'static str,
+    },
+    /// A shape has no spring of positive length (all its vertices coincide).
+    #[error("shape '{shape}' is degenerate: no edge has a positive length (do all its vertices coincide?)")]
+    DegenerateShape {
+        /// The shape's name.
+        shape: String,
+    },
+    /// The solver would need more memory than allowed.
+    #[error("the physical blend of {vertices} vertices would need about {} of memory, over the limit of {}; raise the limit (--max-memory in the CLI), leave out bending springs (--no-bending), or blend a decimated mesh", gib(*predicted_bytes), gib(*limit_bytes))]
+    TooLarge {
+        /// Vertex count.
+        vertices: usize,
+        /// Predicted bytes of one solver.
+        predicted_bytes: u64,
+        /// The limit ([`BlendOptions::max_memory_bytes`]).
+        limit_bytes: u64,
+    },
     /// The linear system could not be solved.
     #[error("equilibrium solve failed: {0}")]
     Solve(#[from] crate::sparse::SolveError),
@@ -116,4 +166,8 @@ pub enum BlendError {
         /// Newton iteration at which it happened.
         iteration: usize,
     },
+}
+
+fn gib(b: u64) -> String {
+    format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
 }

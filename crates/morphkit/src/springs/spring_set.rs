@@ -173,6 +173,11 @@ impl SpringSet {
             StiffnessRule::Uniform => self.scale[q],
         }
     }
+    /// Stiffness multiplier of spring `q`: `k0`, times `bending_scale` for bending springs.
+    #[inline]
+    pub fn stiffness_scale(&self, q: usize) -> f64 {
+        self.scale[q]
+    }
     /// Current lengths of every spring for positions `p`.
     pub fn lengths(&self, p: &[Point]) -> Vec<f64> {
         lengths(&self.springs, p)

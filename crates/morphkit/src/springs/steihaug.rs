@@ -11,9 +11,6 @@
 //! Once the exact Hessian is positive definite near the equilibrium the iteration is plain
 //! preconditioned CG and the outer iteration is Newton's, with its quadratic convergence.
 
-use super::pcg::HessianOperator;
-use crate::sparse::Cholesky;
-
 /// How [`steihaug`] stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Termination {
@@ -66,18 +63,18 @@ fn to_boundary(zz: f64, zd: f64, dd: f64, radius: f64) -> f64 {
 }
 
 /// Steihaug–Toint CG on $H p = -g$ (free coordinates) within $\lVert p\rVert_M \le$ `radius`.
-/// `g` is the gradient restricted to free coordinates. Returns `None` when the preconditioner
-/// cannot be applied (no valid factorization).
+/// `g` is the gradient restricted to free coordinates; `op(p, out)` writes $H p$ and
+/// `precond(r)` overwrites `r` with $M^{-1} r$. Returns `None` when the preconditioner fails
+/// (no valid factorization) or the operator gives non-finite values.
 pub(crate) fn steihaug(
-    op: &HessianOperator<'_>,
-    precond: &Cholesky,
+    op: &mut dyn FnMut(&[f64], &mut [f64]),
+    precond: &mut dyn FnMut(&mut [f64]) -> bool,
     g: &[f64],
     radius: f64,
     stop: &StopRule,
     iterations: &mut usize,
 ) -> Option<TruncatedStep> {
     let n = g.len();
-    let mut full = vec![0.0; op.dof_index.len()];
     let mut z = vec![0.0; n];
     let mut hz = vec![0.0; n];
     let mut r = g.to_vec();
@@ -95,7 +92,10 @@ pub(crate) fn steihaug(
     if gnorm == 0.0 {
         return Some(done(z, &hz, 0.0, Termination::Converged, 0.0));
     }
-    let mut y = precond.solve(&r).ok()?;
+    let mut y = r.clone();
+    if !precond(&mut y) {
+        return None;
+    }
     let mut d: Vec<f64> = y.iter().map(|v| -v).collect();
     let mut ry = dot(&r, &y);
     // M-inner products of the iterate and the direction, by recurrence.
@@ -104,7 +104,7 @@ pub(crate) fn steihaug(
     let mut rel = 1.0;
     for _ in 0..stop.max_iter {
         *iterations += 1;
-        op.apply(&d, &mut full, &mut hd);
+        op(&d, &mut hd);
         let kappa = dot(&d, &hd);
         if !kappa.is_finite() {
             return None;
@@ -131,7 +131,10 @@ pub(crate) fn steihaug(
         if rel <= stop.rtol || rmax <= stop.atol_max {
             return Some(done(z, &hz, zz, Termination::Converged, rel));
         }
-        y = precond.solve(&r).ok()?;
+        y.copy_from_slice(&r);
+        if !precond(&mut y) {
+            return None;
+        }
         let ry_next = dot(&r, &y);
         let beta = ry_next / ry;
         ry = ry_next;

@@ -1,7 +1,7 @@
 //! Blend weights and rest-length interpolation (Ma et al. 2012, Eq. 1 and Sec. 3.3; math
 //! notes §1 for the artist "delta" form).
 
-use super::{BlendError, SpringSet};
+use super::BlendError;
 
 /// How the shapes of a set are mixed. Shape 0 is the base.
 #[derive(Clone, Debug, PartialEq)]
@@ -17,8 +17,7 @@ pub enum Weights {
 }
 
 /// Largest magnitude accepted for any single weight. Weights far outside `[0, 1]` are
-/// extrapolations that no spring system follows meaningfully, and the continuation would need
-/// thousands of sub-steps to reach them.
+/// extrapolations that no spring system follows meaningfully.
 pub const MAX_WEIGHT: f64 = 100.0;
 
 impl Weights {
@@ -26,10 +25,17 @@ impl Weights {
     /// finite, at most [`MAX_WEIGHT`] in magnitude, and the right count for the form.
     pub fn coefficients(&self, n: usize) -> Result<Vec<f64>, BlendError> {
         let check = |w: &[f64]| -> Result<(), BlendError> {
-            match w.iter().position(|x| !x.is_finite()) {
-                Some(index) => Err(BlendError::NonFiniteWeight {
+            if let Some(index) = w.iter().position(|x| !x.is_finite()) {
+                return Err(BlendError::NonFiniteWeight {
                     index,
                     value: w[index],
+                });
+            }
+            match w.iter().position(|x| x.abs() > MAX_WEIGHT) {
+                Some(index) => Err(BlendError::WeightOutOfRange {
+                    index,
+                    value: w[index],
+                    max: MAX_WEIGHT,
                 }),
                 None => Ok(()),
             }
@@ -83,42 +89,6 @@ impl Weights {
     }
 }
 
-/// Interpolated rest lengths for one weight vector.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RestLengths {
-    /// $\bar r_q$ per spring, after clamping.
-    pub values: Vec<f64>,
-    /// Springs whose interpolated rest length fell below `min_fraction × r⁰` and were clamped.
-    pub clamped: Vec<usize>,
-}
-
-impl RestLengths {
-    /// $\bar r = \sum_s c_s r^s$, clamped below at `min_fraction` times the base rest length
-    /// (and at a tiny positive floor for springs of zero base length), so that no rest length is
-    /// ever negative or zero.
-    pub fn interpolate(springs: &SpringSet, coefficients: &[f64], min_fraction: f64) -> Self {
-        let m = springs.len();
-        let mut values = vec![0.0; m];
-        for (s, &c) in coefficients.iter().enumerate() {
-            if c != 0.0 {
-                for (v, r) in values.iter_mut().zip(springs.rest_lengths(s)) {
-                    *v += c * r;
-                }
-            }
-        }
-        let base = springs.rest_lengths(0);
-        let mut clamped = Vec::new();
-        for (q, v) in values.iter_mut().enumerate() {
-            let floor = (min_fraction * base[q]).max(f64::MIN_POSITIVE * 1e10);
-            if *v < floor {
-                *v = floor;
-                clamped.push(q);
-            }
-        }
-        Self { values, clamped }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -161,5 +131,12 @@ mod tests {
             Weights::Delta(vec![1.0]).coefficients(3),
             Err(BlendError::WeightCount { .. })
         ));
+        for w in [1e6, -1e300, 100.5] {
+            assert!(matches!(
+                Weights::Alpha(w).coefficients(2),
+                Err(BlendError::WeightOutOfRange { .. })
+            ));
+        }
+        assert!(Weights::Alpha(-100.0).coefficients(2).is_ok());
     }
 }

@@ -1,0 +1,368 @@
+//! [`PhysicalBlend`]: set-up once (springs, hinges, constraints, the Hessian pattern, the
+//! memory check and the symbolic analysis), then canonical solves, one weight vector at a time
+//! or many in parallel.
+
+use super::constraints::{stretched_vertices, Constraints};
+use super::newton::{projected_newton, trust_region, Problem, Workspace};
+use super::options::{BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary};
+use super::system::{expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem};
+use super::terms::{BlockHessian, BlockPattern, EnergyTerm, HingeTerm, SpringTerm};
+use super::{predictor, BlendError, FillOrdering, SpringKind, SpringSet, StiffnessRule, Weights};
+use crate::mesh::{validate, ShapeSet, Topology};
+use crate::sparse::Ordering;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Physical blendshape solver: build once, then [`solve`](Self::solve) for as many weight
+/// vectors as needed (a slider, an animation). Each solve is the canonical equilibrium of its
+/// weights (see the [module docs](super)): it never depends on earlier solves.
+pub struct PhysicalBlend {
+    rig: Rig,
+    ws: Workspace,
+}
+
+/// Everything that does not change between solves (shared by all threads).
+struct Rig {
+    shapes: ShapeSet,
+    terms: Vec<Box<dyn EnergyTerm>>,
+    constraints: Constraints,
+    system: FreeSystem,
+    options: BlendOptions,
+    tolerance: f64,
+    summary: RigSummary,
+}
+
+impl std::fmt::Debug for PhysicalBlend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PhysicalBlend")
+            .field("summary", &self.rig.summary)
+            .finish()
+    }
+}
+
+fn check_options(o: &BlendOptions) -> Result<(), BlendError> {
+    let bad = |name: &str, why: &str, v: f64| {
+        Err(BlendError::InvalidOption(format!(
+            "{name} must be {why}, got {v:e}"
+        )))
+    };
+    let finite_pos = |v: f64| v.is_finite() && v > 0.0;
+    if !finite_pos(o.gradient_tolerance) {
+        return bad(
+            "the gradient tolerance",
+            "finite and positive",
+            o.gradient_tolerance,
+        );
+    }
+    if !finite_pos(o.springs.k0) {
+        return bad("k0", "finite and positive", o.springs.k0);
+    }
+    if !(o.springs.bending_scale.is_finite() && o.springs.bending_scale >= 0.0) {
+        return bad(
+            "the bending scale",
+            "finite and non-negative",
+            o.springs.bending_scale,
+        );
+    }
+    if !(o.hinges.weight.is_finite() && o.hinges.weight >= 0.0) {
+        return bad(
+            "the hinge weight",
+            "finite and non-negative",
+            o.hinges.weight,
+        );
+    }
+    if !(o.min_rest_fraction > 0.0 && o.min_rest_fraction < 1.0) {
+        return bad("min_rest_fraction", "in (0, 1)", o.min_rest_fraction);
+    }
+    if !(o.kinematic_stretch > 1.0) {
+        return bad(
+            "the kinematic stretch",
+            "greater than 1 (or infinite)",
+            o.kinematic_stretch,
+        );
+    }
+    Ok(())
+}
+
+/// Refuses shapes in which no structure spring has positive length (all vertices coincide).
+fn check_degenerate(shapes: &ShapeSet, springs: &SpringSet) -> Result<(), BlendError> {
+    for s in 0..shapes.len() {
+        let any = springs
+            .springs()
+            .iter()
+            .zip(springs.rest_lengths(s))
+            .any(|(q, &r)| q.kind == SpringKind::Structure && r > 0.0);
+        if !any {
+            return Err(BlendError::DegenerateShape {
+                shape: shapes.name(s).to_string(),
+            });
+        }
+    }
+    Ok(())
+}
+
+impl PhysicalBlend {
+    /// Builds springs, hinges, constraints, the Hessian pattern and its symbolic factorization.
+    pub fn new(shapes: &ShapeSet, options: &BlendOptions) -> Result<Self, BlendError> {
+        Self::with_terms(shapes, options, Vec::new())
+    }
+
+    /// Like [`new`](Self::new), with additional energy terms (internal springs, anchors, soft
+    /// pulls…) added to the springs and hinges. Their couplings join the one pattern.
+    pub fn with_terms(
+        shapes: &ShapeSet,
+        options: &BlendOptions,
+        extra: Vec<Box<dyn EnergyTerm>>,
+    ) -> Result<Self, BlendError> {
+        let o = options;
+        check_options(o)?;
+        for s in 0..shapes.len() {
+            validate(&shapes.mesh(s))?;
+        }
+        let n = shapes.num_vertices();
+        let topology = Topology::new(n, shapes.triangles());
+        let springs = SpringSet::new(shapes, &topology, &o.springs);
+        if springs.is_empty() {
+            return Err(BlendError::NoSprings {
+                cause: if o.springs.structure || o.springs.bending {
+                    "every spring joins vertices that coincide in all shapes"
+                } else {
+                    "both structure and bending springs are turned off"
+                },
+            });
+        }
+        check_degenerate(shapes, &springs)?;
+        let kinematic = stretched_vertices(shapes, o.kinematic_stretch);
+        let constraints = Constraints::new(shapes, &topology, &o.fixed, &kinematic)?;
+
+        // μ of the hinges from the base's structure springs (weight-independent).
+        let (mut ksum, mut lsum, mut count) = (0.0, 0.0, 0usize);
+        for (q, s) in springs.springs().iter().enumerate() {
+            if s.kind == SpringKind::Structure {
+                let r = springs.rest_lengths(0)[q];
+                if r > 0.0 {
+                    ksum += match o.springs.stiffness {
+                        StiffnessRule::InverseRestLength => springs.stiffness_scale(q) / r,
+                        StiffnessRule::Uniform => springs.stiffness_scale(q),
+                    };
+                    lsum += r * r;
+                    count += 1;
+                }
+            }
+        }
+        let count = count.max(1) as f64;
+        let tolerance = o.gradient_tolerance
+            * o.springs.k0
+            * match o.springs.stiffness {
+                StiffnessRule::InverseRestLength => 1.0,
+                StiffnessRule::Uniform => {
+                    let r = springs.rest_lengths(0);
+                    r.iter().sum::<f64>() / r.len() as f64
+                }
+            };
+        let hinges = HingeTerm::new(shapes, &topology, &o.hinges, ksum / count, lsum / count);
+        let mut summary = RigSummary {
+            vertices: n,
+            springs: springs.len(),
+            hinges: hinges.len(),
+            fixed_vertices: constraints.fixed.len() - constraints.kinematic.len(),
+            kinematic_vertices: constraints.kinematic.len(),
+            gauged_components: constraints.gauges.len(),
+            ..Default::default()
+        };
+        let mut terms: Vec<Box<dyn EnergyTerm>> =
+            vec![Box::new(SpringTerm::new(springs, o.min_rest_fraction))];
+        if !hinges.is_empty() {
+            terms.push(Box::new(hinges));
+        }
+        terms.extend(extra);
+
+        let mut pairs = Vec::new();
+        for t in &terms {
+            t.couplings(&mut pairs);
+        }
+        if let Some(&[a, b]) = pairs
+            .iter()
+            .find(|p| p[0] as usize >= n || p[1] as usize >= n)
+        {
+            return Err(BlendError::InvalidOption(format!(
+                "an energy term couples vertices {a} and {b}, but the mesh has {n} vertices"
+            )));
+        }
+        let block_pattern = Arc::new(BlockPattern::new(n, &pairs));
+        drop(pairs);
+        let vertex_order = match o.ordering {
+            FillOrdering::NestedDissection => Some(vertex_nested_dissection(&block_pattern)?),
+            FillOrdering::Amd => None,
+        };
+        summary.predicted_bytes = predicted_bytes(&block_pattern, vertex_order.as_deref())?;
+        if summary.predicted_bytes > o.max_memory_bytes {
+            return Err(BlendError::TooLarge {
+                vertices: n,
+                predicted_bytes: summary.predicted_bytes,
+                limit_bytes: o.max_memory_bytes,
+            });
+        }
+        let system = FreeSystem::new(block_pattern.clone(), &constraints.fixed_dof)?;
+        let ordering = match &vertex_order {
+            Some(order) => Ordering::Custom(expand_vertex_order(order, &system.dof_index)),
+            None => Ordering::Amd,
+        };
+        let chol = system.analyze(ordering)?;
+        summary.free_dofs = system.num_free();
+        summary.factor_nnz = chol.factor_nnz();
+        let nnz = system.pattern.nnz();
+        let ws = Workspace {
+            chol,
+            blocks: BlockHessian::zeros(block_pattern),
+            exact: vec![0.0; nnz],
+            projected: vec![0.0; nnz],
+        };
+        Ok(Self {
+            rig: Rig {
+                shapes: shapes.clone(),
+                terms,
+                constraints,
+                system,
+                options: o.clone(),
+                tolerance,
+                summary,
+            },
+            ws,
+        })
+    }
+
+    /// Sizes of what was built.
+    pub fn summary(&self) -> &RigSummary {
+        &self.rig.summary
+    }
+    /// The energy terms, springs first.
+    pub fn terms(&self) -> &[Box<dyn EnergyTerm>] {
+        &self.rig.terms
+    }
+    /// The resolved constraints.
+    pub fn constraints(&self) -> &Constraints {
+        &self.rig.constraints
+    }
+    /// Number of free unknowns of the Newton system.
+    pub fn num_free_dofs(&self) -> usize {
+        self.rig.system.num_free()
+    }
+    /// Number of stored entries of the Cholesky factor (memory ≈ 8 bytes each).
+    pub fn factor_nnz(&self) -> usize {
+        self.rig.summary.factor_nnz
+    }
+    /// The shape set.
+    pub fn shapes(&self) -> &ShapeSet {
+        &self.rig.shapes
+    }
+    /// The absolute gradient tolerance of a converged solve.
+    pub fn tolerance(&self) -> f64 {
+        self.rig.tolerance
+    }
+
+    /// The canonical equilibrium for `weights`.
+    ///
+    /// A solve that does not reach the tolerance within the iteration budget still returns the
+    /// best state found, with `stats.converged == false` and the failing vertices in
+    /// `stats.unconverged_vertices`; it never returns NaNs.
+    pub fn solve(&mut self, weights: &Weights) -> Result<BlendResult, BlendError> {
+        self.rig.solve(&mut self.ws, weights)
+    }
+
+    /// Solves every weight vector, spread over up to `threads` threads (each with its own
+    /// numeric workspace; the symbolic analysis is shared). Results come back in input order
+    /// and are bit-for-bit those of [`solve`](Self::solve), whatever the thread count.
+    pub fn solve_many(
+        &mut self,
+        weights: &[Weights],
+        threads: usize,
+    ) -> Vec<Result<BlendResult, BlendError>> {
+        let threads = threads.clamp(1, weights.len().max(1));
+        let mut workspaces = Vec::with_capacity(threads - 1);
+        for _ in 1..threads {
+            match self.ws.chol.share_symbolic() {
+                Ok(chol) => workspaces.push(Workspace {
+                    chol,
+                    blocks: self.ws.blocks.clone(),
+                    exact: self.ws.exact.clone(),
+                    projected: self.ws.projected.clone(),
+                }),
+                Err(_) => break, // fewer threads when memory is short
+            }
+        }
+        let rig = &self.rig;
+        let mut slots: Vec<Option<Result<BlendResult, BlendError>>> =
+            (0..weights.len()).map(|_| None).collect();
+        let stride = workspaces.len() + 1;
+        std::thread::scope(|scope| {
+            let mut handles = Vec::new();
+            for (t, mut ws) in workspaces.into_iter().enumerate() {
+                handles.push(scope.spawn(move || {
+                    (t + 1..weights.len())
+                        .step_by(stride)
+                        .map(|k| (k, rig.solve(&mut ws, &weights[k])))
+                        .collect::<Vec<_>>()
+                }));
+            }
+            for k in (0..weights.len()).step_by(stride) {
+                slots[k] = Some(rig.solve(&mut self.ws, &weights[k]));
+            }
+            for h in handles {
+                if let Ok(done) = h.join() {
+                    for (k, r) in done {
+                        slots[k] = Some(r);
+                    }
+                }
+            }
+        });
+        slots
+            .into_iter()
+            .enumerate()
+            .map(|(k, s)| {
+                s.unwrap_or_else(|| Err(BlendError::InvalidOption(format!("frame {k} was lost"))))
+            })
+            .collect()
+    }
+}
+
+impl Rig {
+    fn solve(&self, ws: &mut Workspace, weights: &Weights) -> Result<BlendResult, BlendError> {
+        let start = Instant::now();
+        let c = weights.coefficients(self.shapes.len())?;
+        let params: Vec<_> = self.terms.iter().map(|t| t.prepare(&c)).collect();
+        let lin = predictor::linear(&self.shapes, &c);
+        let mut x = predictor::predict(&self.constraints, &lin);
+        let prob = Problem {
+            terms: &self.terms,
+            params: &params,
+            system: &self.system,
+            options: &self.options,
+            tolerance: self.tolerance,
+        };
+        let mut stats = FrameStats {
+            gradient_tolerance: self.tolerance,
+            clamped_springs: params.iter().map(|p| p.clamped).sum(),
+            ..Default::default()
+        };
+        let g = match self.options.linear_solver {
+            LinearSolver::TrustRegion => trust_region(&prob, ws, &mut x, &mut stats)?,
+            LinearSolver::Direct => projected_newton(&prob, ws, &mut x, &mut stats)?,
+        };
+        if !stats.converged {
+            stats.unconverged_vertices = prob.failed_vertices(&g);
+        }
+        let positions = predictor::output(&self.constraints, &x, &lin);
+        stats.seconds = start.elapsed().as_secs_f64();
+        Ok(BlendResult { positions, stats })
+    }
+}
+
+/// One-shot physical blend: builds a [`PhysicalBlend`] and solves once.
+pub fn blend(
+    shapes: &ShapeSet,
+    weights: &Weights,
+    options: &BlendOptions,
+) -> Result<BlendResult, BlendError> {
+    PhysicalBlend::new(shapes, options)?.solve(weights)
+}

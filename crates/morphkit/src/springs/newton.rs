@@ -1,0 +1,303 @@
+//! Newton iterations towards the equilibrium $\nabla E(x) = 0$ (Ma et al. 2012, Eq. 2–4;
+//! math notes §1), over the sum of [`EnergyTerm`]s and the free coordinates of a
+//! [`FreeSystem`]. Nothing here knows which terms exist.
+//!
+//! - [`trust_region`] (default): Steihaug–Toint truncated CG on the exact Hessian (Nocedal &
+//!   Wright Alg. 7.2; Conn, Gould & Toint §7.5.1), preconditioned by a Cholesky factor of the
+//!   projected Hessian, which also defines the trust-region norm. Negative curvature of
+//!   compressed springs is followed to the trust-region boundary instead of being clamped away.
+//!   The factor is refreshed only when the inner iteration runs out of its budget without
+//!   progress. Near the solution this is Newton's method with quadratic convergence.
+//! - [`projected_newton`]: a fresh factorization of the projected Hessian every step and an
+//!   Armijo backtracking line search.
+//!
+//! Every decision (budgets, radius updates, refactorization, regularization) depends on the
+//! iterates alone, never on timings, so a solve is a deterministic function of its inputs.
+
+use super::options::{BlendOptions, FrameStats};
+use super::steihaug::{steihaug, StopRule, Termination};
+use super::system::FreeSystem;
+use super::terms::{total_gradient, BlockHessian, EnergyTerm, HessianKind, TermParameters};
+use super::BlendError;
+use crate::sparse::{Cholesky, SolveError};
+
+/// Per-thread buffers of a solve: numeric factor, block values, scalar values.
+pub(crate) struct Workspace {
+    pub chol: Cholesky,
+    pub blocks: BlockHessian,
+    /// Scalar values of the exact Hessian (the CG operator).
+    pub exact: Vec<f64>,
+    /// Scalar values of the projected Hessian (the factorization input).
+    pub projected: Vec<f64>,
+}
+
+/// One equilibrium problem: terms with this frame's parameters.
+pub(crate) struct Problem<'a> {
+    pub terms: &'a [Box<dyn EnergyTerm>],
+    pub params: &'a [TermParameters],
+    pub system: &'a FreeSystem,
+    pub options: &'a BlendOptions,
+    /// Absolute gradient tolerance.
+    pub tolerance: f64,
+}
+
+impl Problem<'_> {
+    fn gradient(&self, x: &[f64], g: &mut [f64]) -> f64 {
+        total_gradient(self.terms, self.params, x, g)
+    }
+
+    /// Assembles the Hessian of `kind` at `x` into `out` (scalar free-coordinate values).
+    fn hessian(&self, ws: &mut Workspace, x: &[f64], kind: HessianKind, exact_buf: bool) {
+        ws.blocks.clear();
+        for (t, p) in self.terms.iter().zip(self.params) {
+            t.add_hessian(p, x, kind, &mut ws.blocks);
+        }
+        let out = if exact_buf {
+            &mut ws.exact
+        } else {
+            &mut ws.projected
+        };
+        self.system.assemble(&ws.blocks, out);
+    }
+
+    /// Factorizes `ws.projected`, adding the smallest multiple of the identity (from a fixed
+    /// ladder) that makes it positive definite: flat regions have no stiffness normal to their
+    /// plane at rest, and round-off can make such a pivot non-positive.
+    fn factorize(&self, ws: &mut Workspace, stats: &mut FrameStats) -> Result<(), BlendError> {
+        let diag = &self.system.diag_slots;
+        let mean =
+            diag.iter().map(|&d| ws.projected[d as usize]).sum::<f64>() / diag.len().max(1) as f64;
+        let mut shift = 1e-10 * mean;
+        let mut added = 0.0;
+        loop {
+            for &d in diag {
+                ws.projected[d as usize] += shift - added;
+            }
+            added = shift;
+            stats.factorizations += 1;
+            match ws.chol.factorize(&ws.projected) {
+                Ok(()) => return Ok(()),
+                Err(SolveError::NotPositiveDefinite { .. }) if shift < 1e-2 * mean => {
+                    shift *= 100.0;
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+    }
+
+    /// Per-vertex residual force over free coordinates: the vertices above the tolerance,
+    /// largest first.
+    pub fn failed_vertices(&self, g: &[f64]) -> Vec<u32> {
+        let dof = &self.system.dof_index;
+        let mut v: Vec<(f64, u32)> = (0..g.len() / 3)
+            .filter_map(|i| {
+                let r = (0..3)
+                    .filter(|&a| dof[3 * i + a] != u32::MAX)
+                    .fold(0.0f64, |m, a| m.max(g[3 * i + a].abs()));
+                (r > self.tolerance).then_some((r, i as u32))
+            })
+            .collect();
+        v.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        v.truncate(10_000);
+        v.into_iter().map(|(_, i)| i).collect()
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Energy differences below this fraction of the energy are round-off.
+const ROUNDOFF: f64 = 1e-13;
+
+/// Trust-region Newton–CG from `x` (modified in place). Returns the final gradient.
+pub(crate) fn trust_region(
+    prob: &Problem<'_>,
+    ws: &mut Workspace,
+    x: &mut Vec<f64>,
+    stats: &mut FrameStats,
+) -> Result<Vec<f64>, BlendError> {
+    let sys = prob.system;
+    let n3 = x.len();
+    let nfree = sys.num_free();
+    let mut g = vec![0.0; n3];
+    let mut e = prob.gradient(x, &mut g);
+    let mut gmax = sys.max_free(&g);
+    let g0max = gmax;
+    let mut x_trial = vec![0.0; n3];
+    let mut g_trial = vec![0.0; n3];
+    let mut gfree = vec![0.0; nfree];
+    stats.converged = gmax <= prob.tolerance;
+    let mut refactor = true;
+    let mut exact_current = false;
+    let mut radius = f64::NAN;
+    let mut extend = 1usize;
+    while !stats.converged && stats.newton_iterations < prob.options.max_newton_iterations {
+        stats.newton_iterations += 1;
+        let every = prob.options.refactor_every;
+        if refactor || (every > 0 && (stats.newton_iterations - 1) % every == 0) {
+            prob.hessian(ws, x, HessianKind::Projected, false);
+            prob.factorize(ws, stats)?;
+            refactor = false;
+        }
+        if !exact_current {
+            prob.hessian(ws, x, HessianKind::Exact, true);
+            exact_current = true;
+        }
+        sys.gather(&g, &mut gfree);
+        if radius.is_nan() {
+            let mut mg = gfree.clone();
+            ws.chol.solve_one(&mut mg)?;
+            radius = 2.0 * dot(&gfree, &mg).max(0.0).sqrt();
+        }
+        let stop = StopRule {
+            rtol: (0.1 * gmax / g0max).clamp(1e-6, 0.1),
+            atol_max: 0.1 * prob.tolerance,
+            max_iter: (prob.options.cg_iterations.max(1) * extend).min(400),
+        };
+        let (chol, exact) = (&mut ws.chol, &ws.exact);
+        let mut op = |p: &[f64], out: &mut [f64]| sys.mul(exact, p, out);
+        let mut pre = |r: &mut [f64]| chol.solve_one(r).is_ok();
+        let result = steihaug(
+            &mut op,
+            &mut pre,
+            &gfree,
+            radius,
+            &stop,
+            &mut stats.cg_iterations,
+        );
+        let Some(step) = result else {
+            refactor = true;
+            continue;
+        };
+        extend = if step.termination == Termination::Budget {
+            (2 * extend).min(10)
+        } else {
+            1
+        };
+        if step.termination == Termination::Budget && step.relative_residual > 0.1 {
+            // The factor no longer fits the Hessian: refresh it.
+            refactor = true;
+            if step.relative_residual > 0.9 {
+                continue;
+            }
+        }
+        x_trial.copy_from_slice(x);
+        sys.add_step(&mut x_trial, 1.0, &step.step);
+        let e_trial = prob.gradient(&x_trial, &mut g_trial);
+        let g_trial_max = sys.max_free(&g_trial);
+        let roundoff = ROUNDOFF * e.abs().max(f64::MIN_POSITIVE);
+        let actual = e - e_trial;
+        let rho = if !e_trial.is_finite() {
+            f64::NEG_INFINITY
+        } else if actual.abs() <= roundoff || step.decrease <= roundoff {
+            // Near the minimum energy differences drown in round-off: a step that reduces the
+            // gradient counts as a success.
+            if g_trial_max < gmax {
+                1.0
+            } else {
+                f64::NEG_INFINITY
+            }
+        } else {
+            actual / step.decrease.max(f64::MIN_POSITIVE)
+        };
+        if rho < 0.25 {
+            radius = 0.25 * step.m_norm.min(radius);
+        } else if rho > 0.75 && step.termination == Termination::Boundary {
+            radius *= 2.0;
+        }
+        if rho > 1e-4 {
+            e = e_trial;
+            gmax = g_trial_max;
+            std::mem::swap(x, &mut x_trial);
+            std::mem::swap(&mut g, &mut g_trial);
+            exact_current = false;
+        } else {
+            stats.rejected_steps += 1;
+            if radius.is_nan() || radius <= 1e-300 {
+                break;
+            }
+        }
+        stats.converged = gmax <= prob.tolerance;
+    }
+    if !e.is_finite() {
+        return Err(BlendError::Diverged {
+            iteration: stats.newton_iterations,
+        });
+    }
+    stats.gradient_norm = gmax;
+    stats.energy = e;
+    Ok(g)
+}
+
+/// Projected Newton with an Armijo line search from `x`. Returns the final gradient.
+pub(crate) fn projected_newton(
+    prob: &Problem<'_>,
+    ws: &mut Workspace,
+    x: &mut Vec<f64>,
+    stats: &mut FrameStats,
+) -> Result<Vec<f64>, BlendError> {
+    let sys = prob.system;
+    let n3 = x.len();
+    let mut g = vec![0.0; n3];
+    let mut e = prob.gradient(x, &mut g);
+    let mut gmax = sys.max_free(&g);
+    let mut x_trial = vec![0.0; n3];
+    let mut g_trial = vec![0.0; n3];
+    let mut step = vec![0.0; sys.num_free()];
+    stats.converged = gmax <= prob.tolerance;
+    while !stats.converged && stats.newton_iterations < prob.options.max_newton_iterations {
+        stats.newton_iterations += 1;
+        prob.hessian(ws, x, HessianKind::Projected, false);
+        prob.factorize(ws, stats)?;
+        sys.gather(&g, &mut step);
+        step.iter_mut().for_each(|v| *v = -*v);
+        ws.chol.solve_one(&mut step)?;
+        let mut slope = 0.0;
+        for (k, &i) in sys.dof_index.iter().enumerate() {
+            if i != u32::MAX {
+                slope += g[k] * step[i as usize];
+            }
+        }
+        if slope >= 0.0 {
+            // Not a descent direction (round-off at convergence): steepest descent.
+            sys.gather(&g, &mut step);
+            step.iter_mut().for_each(|v| *v = -*v);
+            slope = -dot(&step, &step);
+        }
+        let mut t = 1.0;
+        let mut accepted = false;
+        for _ in 0..60 {
+            x_trial.copy_from_slice(x);
+            sys.add_step(&mut x_trial, t, &step);
+            let e_trial = prob.gradient(&x_trial, &mut g_trial);
+            let g_trial_max = sys.max_free(&g_trial);
+            let roundoff = ROUNDOFF * e.abs().max(f64::MIN_POSITIVE);
+            if e_trial.is_finite()
+                && (e_trial <= e + prob.options.armijo * t * slope
+                    || (e_trial - e <= roundoff && g_trial_max < gmax))
+            {
+                accepted = true;
+                e = e_trial;
+                gmax = g_trial_max;
+                std::mem::swap(x, &mut x_trial);
+                std::mem::swap(&mut g, &mut g_trial);
+                break;
+            }
+            stats.rejected_steps += 1;
+            t *= 0.5;
+        }
+        stats.converged = gmax <= prob.tolerance;
+        if !accepted {
+            break;
+        }
+    }
+    if !e.is_finite() {
+        return Err(BlendError::Diverged {
+            iteration: stats.newton_iterations,
+        });
+    }
+    stats.gradient_norm = gmax;
+    stats.energy = e;
+    Ok(g)
+}

@@ -1,0 +1,157 @@
+//! Options of the physical blend, and what a solve reports.
+
+use super::terms::HingeOptions;
+use super::{FixedVertices, SpringOptions};
+use crate::mesh::Point;
+
+/// Options of the physical blend. Every field has a meaningful default.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlendOptions {
+    /// Which distance springs and how stiff (Ma et al. Sec. 3.1, 3.5).
+    pub springs: SpringOptions,
+    /// The signed-hinge bending term (weight 0 turns it off).
+    pub hinges: HingeOptions,
+    /// Boundary conditions. Default [`FixedVertices::Auto`].
+    pub fixed: FixedVertices,
+    /// Convergence: stop when $\max_k |\partial E / \partial x_k| \le$ `gradient_tolerance`
+    /// $\cdot k_0 \cdot s$ over the free coordinates, with $s = 1$ for the $k = k_0/\bar r$
+    /// rule (the gradient is then a force in units of $k_0$ times strain, independent of the
+    /// mesh's scale) and $s$ = the mean base rest length for uniform stiffness. Default
+    /// `1e-6`: residual forces of one part per million of strain on one spring.
+    pub gradient_tolerance: f64,
+    /// Newton iterations allowed per solve; a solve that has not converged by then is
+    /// returned with `converged = false` and the vertices that failed. Default `300`.
+    pub max_newton_iterations: usize,
+    /// Interpolated rest lengths are clamped below at this fraction of the spring's shortest
+    /// length over the shapes (only extrapolated weights reach it; counted per frame), and
+    /// stiffness $k_0/\bar r$ uses at least this fraction of its longest. Default `0.05`.
+    pub min_rest_fraction: f64,
+    /// Triangles stretched by more than this factor (largest singular value of their 2D
+    /// deformation) between the base and any target are *kinematic*: no material stretches
+    /// that far, so their vertices follow the linear blend as boundary conditions instead of
+    /// being solved for (an opening mouth's inner lips and mouth interior, a slit that opens).
+    /// `f64::INFINITY` turns this off. Default `15`: above the largest stretch in any horse
+    /// pose of the test data (11×), where solving them as springs gives the better shape,
+    /// and below the 30–300× of an opening mouth.
+    pub kinematic_stretch: f64,
+    /// Armijo sufficient-decrease constant of the [`LinearSolver::Direct`] line search.
+    /// Default `1e-4`.
+    pub armijo: f64,
+    /// How Newton systems are solved. Default [`LinearSolver::TrustRegion`].
+    pub linear_solver: LinearSolver,
+    /// Fill-reducing ordering of the Hessian. Default [`FillOrdering::NestedDissection`].
+    pub ordering: FillOrdering,
+    /// Inner conjugate-gradient iterations per trust-region step before the preconditioner
+    /// is refreshed (doubled while steps keep running out). Default `40`. A count, never a
+    /// time, so that results do not depend on the machine's load.
+    pub cg_iterations: usize,
+    /// Refresh the preconditioner's factorization every this many trust-region iterations
+    /// (`0`: only when the inner iteration stalls). Default `1`.
+    pub refactor_every: usize,
+    /// Largest predicted memory of one solver, in bytes; a larger problem is refused before
+    /// anything big is allocated, with the estimate in the error. Default 8 GiB.
+    pub max_memory_bytes: u64,
+}
+
+/// Fill-reducing ordering for the Hessian's Cholesky factor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum FillOrdering {
+    /// faer's approximate minimum degree on the coordinate graph.
+    Amd,
+    /// METIS nested dissection on the vertex graph, expanded to coordinates. The default:
+    /// less fill on surface meshes of a few thousand vertices and more.
+    #[default]
+    NestedDissection,
+}
+
+/// How each Newton system is solved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LinearSolver {
+    /// Projected Newton with an Armijo line search and a fresh numeric factorization per step.
+    Direct,
+    /// Trust-region Newton–CG (Steihaug–Toint) on the exact Hessian, preconditioned by a
+    /// Cholesky factorization of the projected Hessian that is refreshed only when the inner
+    /// iteration stalls. The default.
+    #[default]
+    TrustRegion,
+}
+
+impl Default for BlendOptions {
+    fn default() -> Self {
+        Self {
+            springs: SpringOptions::default(),
+            hinges: HingeOptions::default(),
+            fixed: FixedVertices::Auto,
+            gradient_tolerance: 1e-6,
+            max_newton_iterations: 300,
+            min_rest_fraction: 0.05,
+            kinematic_stretch: 15.0,
+            armijo: 1e-4,
+            linear_solver: LinearSolver::TrustRegion,
+            ordering: FillOrdering::NestedDissection,
+            cg_iterations: 40,
+            refactor_every: 1,
+            max_memory_bytes: 8 << 30,
+        }
+    }
+}
+
+/// Solver statistics of one solve.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FrameStats {
+    /// Newton (outer) iterations.
+    pub newton_iterations: usize,
+    /// Rejected steps (trust-region shrinks or line-search halvings).
+    pub rejected_steps: usize,
+    /// Numeric factorizations (including regularization retries).
+    pub factorizations: usize,
+    /// Inner conjugate-gradient iterations.
+    pub cg_iterations: usize,
+    /// Final $\max_k |\partial E/\partial x_k|$ over free coordinates.
+    pub gradient_norm: f64,
+    /// The tolerance it was compared with (absolute).
+    pub gradient_tolerance: f64,
+    /// Final energy.
+    pub energy: f64,
+    /// Whether the gradient reached the tolerance.
+    pub converged: bool,
+    /// Springs (and hinges) whose interpolated rest parameter was clamped.
+    pub clamped_springs: usize,
+    /// When not converged: vertices whose residual force exceeds the tolerance, largest
+    /// first (at most 10 000).
+    pub unconverged_vertices: Vec<u32>,
+    /// Wall time in seconds (reported only; no decision depends on it).
+    pub seconds: f64,
+}
+
+/// A blended shape and how it was found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlendResult {
+    /// Vertex positions, `#V`.
+    pub positions: Vec<Point>,
+    /// Solver statistics.
+    pub stats: FrameStats,
+}
+
+/// What a [`PhysicalBlend`](super::PhysicalBlend) was built with.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RigSummary {
+    /// Vertices.
+    pub vertices: usize,
+    /// Distance springs.
+    pub springs: usize,
+    /// Signed hinges.
+    pub hinges: usize,
+    /// Vertices held by boundary conditions (user-given or automatic).
+    pub fixed_vertices: usize,
+    /// Vertices of over-stretched (kinematic) triangles that follow the linear blend.
+    pub kinematic_vertices: usize,
+    /// Connected components held only by the rigid gauge.
+    pub gauged_components: usize,
+    /// Free unknowns of the Newton system.
+    pub free_dofs: usize,
+    /// Stored entries of the Cholesky factor.
+    pub factor_nnz: usize,
+    /// Predicted bytes of one solver workspace (the memory check).
+    pub predicted_bytes: u64,
+}

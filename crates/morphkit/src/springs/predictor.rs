@@ -1,0 +1,57 @@
+//! The predictor $P(w)$ that every solve starts from, and the output alignment.
+//!
+//! $P(w)$ is the linear blend $L(c) = \sum_s c_s x^s$ of the shapes, expressed in solver
+//! coordinates: a component held by a rigid [`Gauge`](super::Gauge) is rotated into the frame
+//! of its three pinned vertices *in the predictor* ([`Gauge::frame_for`](super::Gauge)), so the
+//! pins strain nothing; fixed and kinematic vertices sit at their linear blend. $P$ depends on
+//! the weights alone and equals shape $s$ exactly at one-hot weights $e_s$, where every term's
+//! energy and gradient vanish: endpoints are exact after zero iterations.
+//!
+//! After the solve, each gauged component is moved rigidly (Kabsch) onto $L(c)$, so it sits
+//! where an artist expects it; fixed vertices are already in world coordinates.
+
+use super::constraints::rotate_into;
+use super::Constraints;
+use crate::geom::kabsch;
+use crate::mesh::{Point, ShapeSet};
+
+/// The linear blend $\sum_s c_s x^s$.
+pub(crate) fn linear(shapes: &ShapeSet, c: &[f64]) -> Vec<Point> {
+    let mut out = vec![[0.0; 3]; shapes.num_vertices()];
+    for (s, &w) in c.iter().enumerate() {
+        if w != 0.0 {
+            for (o, p) in out.iter_mut().zip(shapes.positions(s)) {
+                for a in 0..3 {
+                    o[a] += w * p[a];
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The predictor in solver coordinates, flattened (`3 #V`), from the linear blend `lin`.
+pub(crate) fn predict(constraints: &Constraints, lin: &[Point]) -> Vec<f64> {
+    let mut p = lin.to_vec();
+    for g in &constraints.gauges {
+        let frame = g.frame_for(lin);
+        for &v in &g.vertices {
+            p[v as usize] = rotate_into(&frame, lin[v as usize]);
+        }
+    }
+    p.into_iter().flatten().collect()
+}
+
+/// Solver coordinates back to world positions: gauged components aligned to `lin`.
+pub(crate) fn output(constraints: &Constraints, x: &[f64], lin: &[Point]) -> Vec<Point> {
+    let mut p: Vec<Point> = x.chunks_exact(3).map(|v| [v[0], v[1], v[2]]).collect();
+    for comp in constraints.gauges.iter().map(|g| &g.vertices) {
+        let from: Vec<Point> = comp.iter().map(|&v| p[v as usize]).collect();
+        let to: Vec<Point> = comp.iter().map(|&v| lin[v as usize]).collect();
+        let fit = kabsch(&from, &to, &[]);
+        for &v in comp {
+            p[v as usize] = fit.apply(p[v as usize]);
+        }
+    }
+    p
+}

@@ -1,0 +1,203 @@
+//! The Newton system over the free coordinates: index maps, the scalar lower-triangle pattern
+//! built once from the terms' [`BlockPattern`], assembly of block values into it, and the
+//! symmetric product used by the inner conjugate-gradient iterations.
+//!
+//! Coordinates are `3 #V` (`[x₀, y₀, z₀, x₁, …]`); fixed coordinates (boundary conditions,
+//! gauge pins, kinematic vertices) are eliminated, so the matrix is `n_free × n_free`.
+
+use super::terms::{BlockHessian, BlockPattern};
+use crate::sparse::{Cholesky, Ordering, SolveError, SymmetricPattern};
+use std::sync::Arc;
+
+const NONE: u32 = u32::MAX;
+
+/// Free-coordinate indexing and value maps of the Newton matrix.
+#[derive(Debug)]
+pub(crate) struct FreeSystem {
+    /// Free index of each of the `3 #V` coordinates, [`u32::MAX`] when fixed.
+    pub dof_index: Vec<u32>,
+    /// Value slot of each entry `(a, c)` of each vertex's diagonal block (lower triangle only).
+    diag_dest: Vec<[u32; 9]>,
+    /// Value slot of each entry of each off-diagonal block.
+    off_dest: Vec<[u32; 9]>,
+    /// Diagonal slot of each free coordinate.
+    pub diag_slots: Vec<u32>,
+    pub pattern: Arc<SymmetricPattern>,
+}
+
+impl FreeSystem {
+    /// Index maps and the scalar pattern for `fixed_dof` (`3 #V`).
+    pub fn new(block_pattern: Arc<BlockPattern>, fixed_dof: &[bool]) -> Result<Self, SolveError> {
+        let n = block_pattern.num_vertices();
+        let mut dof_index = vec![NONE; 3 * n];
+        let mut nfree = 0u32;
+        for (k, fixed) in fixed_dof.iter().enumerate() {
+            if !fixed {
+                dof_index[k] = nfree;
+                nfree += 1;
+            }
+        }
+        let mut entries = Vec::new();
+        let mut owner = Vec::new();
+        for v in 0..n {
+            for a in 0..3 {
+                for c in 0..=a {
+                    let (r, q) = (dof_index[3 * v + a], dof_index[3 * v + c]);
+                    if r != NONE && q != NONE {
+                        entries.push((r as usize, q as usize));
+                        owner.push((0u8, v, 3 * a + c));
+                    }
+                }
+            }
+        }
+        for i in 0..n {
+            let start = block_pattern.row_start(i);
+            for (k, &j) in block_pattern.row(i).iter().enumerate() {
+                for a in 0..3 {
+                    for c in 0..3 {
+                        let (r, q) = (dof_index[3 * i + a], dof_index[3 * j as usize + c]);
+                        if r != NONE && q != NONE {
+                            entries.push((r as usize, q as usize));
+                            owner.push((1u8, start + k, 3 * a + c));
+                        }
+                    }
+                }
+            }
+        }
+        let (pattern, slots) = SymmetricPattern::new(nfree as usize, &entries)?;
+        let mut diag_dest = vec![[NONE; 9]; n];
+        let mut off_dest = vec![[NONE; 9]; block_pattern.num_pairs()];
+        for ((kind, b, e), s) in owner.into_iter().zip(slots) {
+            if kind == 0 {
+                diag_dest[b][e] = s as u32;
+            } else {
+                off_dest[b][e] = s as u32;
+            }
+        }
+        let diag_slots = (0..nfree as usize)
+            .map(|k| pattern.diag_slot(k) as u32)
+            .collect();
+        Ok(Self {
+            dof_index,
+            diag_dest,
+            off_dest,
+            diag_slots,
+            pattern: Arc::new(pattern),
+        })
+    }
+
+    /// Number of free coordinates.
+    pub fn num_free(&self) -> usize {
+        self.diag_slots.len()
+    }
+
+    /// Writes the block values into the scalar lower-triangle `values`.
+    pub fn assemble(&self, h: &BlockHessian, values: &mut [f64]) {
+        values.iter_mut().for_each(|v| *v = 0.0);
+        for (b, dest) in h.diag.iter().zip(&self.diag_dest) {
+            for (e, &s) in dest.iter().enumerate() {
+                if s != NONE {
+                    values[s as usize] += b[e / 3][e % 3];
+                }
+            }
+        }
+        for (b, dest) in h.off.iter().zip(&self.off_dest) {
+            for (e, &s) in dest.iter().enumerate() {
+                if s != NONE {
+                    values[s as usize] += b[e / 3][e % 3];
+                }
+            }
+        }
+    }
+
+    /// `out = A p` for the symmetric matrix with lower-triangle `values`.
+    pub fn mul(&self, values: &[f64], p: &[f64], out: &mut [f64]) {
+        self.pattern.mul_vec_into(values, p, out);
+    }
+
+    /// The free entries of a full-length vector.
+    pub fn gather(&self, full: &[f64], free: &mut [f64]) {
+        for (k, &i) in self.dof_index.iter().enumerate() {
+            if i != NONE {
+                free[i as usize] = full[k];
+            }
+        }
+    }
+
+    /// `x[k] += t · step[free(k)]` over free coordinates.
+    pub fn add_step(&self, x: &mut [f64], t: f64, step: &[f64]) {
+        for (k, &i) in self.dof_index.iter().enumerate() {
+            if i != NONE {
+                x[k] += t * step[i as usize];
+            }
+        }
+    }
+
+    /// Max-norm of a full-length vector over the free coordinates.
+    pub fn max_free(&self, g: &[f64]) -> f64 {
+        g.iter()
+            .zip(&self.dof_index)
+            .filter(|(_, i)| **i != NONE)
+            .fold(0.0, |m, (v, _)| m.max(v.abs()))
+    }
+
+    /// Symbolic analysis of the scalar pattern with `ordering`.
+    pub fn analyze(&self, ordering: Ordering) -> Result<Cholesky, SolveError> {
+        Cholesky::analyze((*self.pattern).clone(), ordering)
+    }
+}
+
+/// METIS nested dissection of the vertex graph of `pattern`.
+pub(crate) fn vertex_nested_dissection(pattern: &BlockPattern) -> Result<Vec<usize>, SolveError> {
+    let nv = pattern.num_vertices();
+    let mut adj = vec![Vec::new(); nv];
+    for i in 0..nv {
+        for &j in pattern.row(i) {
+            adj[i].push(j as usize);
+            adj[j as usize].push(i);
+        }
+    }
+    crate::sparse::metis::nested_dissection(&adj)
+}
+
+/// A vertex order expanded to the free coordinates (each vertex's free coordinates together).
+pub(crate) fn expand_vertex_order(order: &[usize], dof_index: &[u32]) -> Vec<usize> {
+    let mut out = Vec::with_capacity(dof_index.len());
+    for &v in order {
+        for a in 0..3 {
+            if dof_index[3 * v + a] != NONE {
+                out.push(dof_index[3 * v + a] as usize);
+            }
+        }
+    }
+    out
+}
+
+/// Predicted bytes of the Newton solve of a system: the scalar pattern and its values (twice:
+/// exact and projected), the block Hessian, and the factor of a vertex-level symbolic analysis
+/// scaled by 9 (every vertex pair is a 3×3 block), per solver workspace. Computed before any
+/// scalar-level allocation, so that a mesh too large for the machine is refused up front.
+pub(crate) fn predicted_bytes(
+    block_pattern: &BlockPattern,
+    ordering_vertices: Option<&[usize]>,
+) -> Result<u64, SolveError> {
+    let n = block_pattern.num_vertices();
+    let mut entries = Vec::with_capacity(block_pattern.num_pairs());
+    for i in 0..n {
+        for &j in block_pattern.row(i) {
+            entries.push((j as usize, i));
+        }
+    }
+    let (vp, _) = SymmetricPattern::new(n, &entries)?;
+    let ordering = match ordering_vertices {
+        Some(p) => Ordering::Custom(p.to_vec()),
+        None => Ordering::Amd,
+    };
+    let l_vertex = Cholesky::predicted_factor_nnz(&vp, ordering)? as u64;
+    let pairs = block_pattern.num_pairs() as u64;
+    let nv = n as u64;
+    let scalar_nnz = 9 * pairs + 6 * nv;
+    let factor = 9 * l_vertex;
+    // 8 bytes per factor value, 16 per scalar entry (index + value), two value arrays, blocks.
+    Ok(8 * factor + 16 * scalar_nnz + 16 * scalar_nnz + 72 * (nv + pairs))
+}

@@ -1,0 +1,404 @@
+//! Signed hinges: a bending term that tells a fold up from a fold down.
+//!
+//! Distance springs see only lengths; a 2-ring spring across an edge sees only $\cos\theta$ of
+//! the dihedral angle, so a thin, weakly coupled region can mirror itself at no cost and the
+//! blend crumples (the project's blend-design notes, §2). Following discrete shells (Grinspun et
+//! al. 2003) and the dihedral-angle interpolation of Fröhlich & Botsch 2011, each interior edge
+//! gets a hinge whose rest angle is the blended *signed* dihedral angle.
+//!
+//! For an edge $e = (a, b)$ with opposite vertices $c$ and $d$, define
+//! $n_1 = (b - a) \times (c - a)$ and $n_2 = (d - a) \times (b - a)$ (the two face normals of a
+//! consistently oriented mesh, unnormalised; the definition is geometric, so it does not depend
+//! on the file's face orientation), $\hat e = (b - a)/\lVert b - a\rVert$, and the signed angle
+//! $\theta = \operatorname{atan2}(\hat e \cdot (n_1 \times n_2),\, n_1 \cdot n_2)$.
+//! Per shape $s$ this gives $\theta^s$ (unwrapped to within $\pi$ of $\theta^0$) and normal
+//! lengths $\lVert n^s_{1,2}\rVert$; blending gives $\bar\Theta = \sum_s c_s \theta^s$ and
+//! $\beta_{1,2} = \sum_s c_s \lVert n^s_{1,2}\rVert$. The residual
+//!
+//! $$\rho = n_2/\beta_2 - (\cos\bar\Theta\, n_1 + \sin\bar\Theta\, \hat e \times n_1)/\beta_1$$
+//!
+//! is zero exactly when the current hinge has angle $\bar\Theta$ and the blended normal lengths,
+//! is invariant under rigid motions, penalises mirror flips ($|\rho|^2 \approx 2 - 2\cos(\theta -
+//! \bar\Theta)$) and has no singularity at degenerate triangles (unlike a raw `atan2` penalty).
+//! The energy is $E_h = \mu\, b_h \lVert\rho\rVert^2$ with $b_h = \lVert e\rVert^2/(A_1 + A_2)$ on
+//! the base (capped at `max_shape_factor`) and $\mu = c\, \overline{k}\, \overline{l^2}$ (mean
+//! structure-spring stiffness and squared length on the base), so `weight` $= c$ is unit-free.
+//! The Hessian is Gauss–Newton, $2 \mu b_h J^\top J$, positive semi-definite in both
+//! [`HessianKind`]s.
+//!
+//! Hinges are left out where the dihedral angle is ill defined in some shape: a face of
+//! (nearly) zero area, an edge of zero length, or a fold within `min_fold_margin` of ±π.
+
+use super::{Block, BlockHessian, EnergyTerm, HessianKind, TermParameters};
+use crate::mesh::{ShapeSet, Topology};
+use nalgebra::{Matrix3, Vector3};
+use std::f64::consts::PI;
+
+/// Options of the signed-hinge term.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HingeOptions {
+    /// Hinge weight $c$ relative to the springs (unit-free). `0` disables hinges. Default
+    /// `0.01`: enough to break the mirror symmetry that lets thin regions crumple, small
+    /// enough to leave the spring equilibrium otherwise unchanged (blend-design §2).
+    pub weight: f64,
+    /// Hinges whose fold comes within this angle (radians) of ±π in some shape are left out.
+    /// Default `0.17` (about 10°).
+    pub min_fold_margin: f64,
+    /// Cap on the shape factor $b_h = \lVert e\rVert^2/(A_1+A_2)$ (about 1.15 for equilateral
+    /// triangles). Default `10`.
+    pub max_shape_factor: f64,
+}
+
+impl Default for HingeOptions {
+    fn default() -> Self {
+        Self {
+            weight: 0.01,
+            min_fold_margin: 0.17,
+            max_shape_factor: 10.0,
+        }
+    }
+}
+
+/// The signed hinges of a shape set. Parameters: per hinge `[cos Θ̄, sin Θ̄, 1/β₁, 1/β₂]`.
+pub struct HingeTerm {
+    /// `[a, b, c, d]` per hinge.
+    hinges: Vec<[u32; 4]>,
+    /// `μ b_h` per hinge.
+    weight: Vec<f64>,
+    /// Per shape, per hinge: unwrapped angle, |n₁|, |n₂|.
+    angle: Vec<Vec<f64>>,
+    len1: Vec<Vec<f64>>,
+    len2: Vec<Vec<f64>>,
+    /// Floors for extrapolated normal lengths.
+    floor1: Vec<f64>,
+    floor2: Vec<f64>,
+}
+
+fn v3(x: &[f64], i: u32) -> Vector3<f64> {
+    let i = 3 * i as usize;
+    Vector3::new(x[i], x[i + 1], x[i + 2])
+}
+
+fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
+}
+
+/// Normals and signed angle of hinge `h` at positions `x` (flattened).
+fn measure(x: &[f64], h: [u32; 4]) -> (f64, f64, f64, f64) {
+    let [a, b, c, d] = h.map(|v| v3(x, v));
+    let e = b - a;
+    let n1 = e.cross(&(c - a));
+    let n2 = (d - a).cross(&e);
+    let le = e.norm();
+    let theta = if le > 0.0 {
+        (e.dot(&n1.cross(&n2)) / le).atan2(n1.dot(&n2))
+    } else {
+        0.0
+    };
+    (theta, n1.norm(), n2.norm(), le)
+}
+
+impl HingeTerm {
+    /// Builds the hinges of every interior manifold edge of `topology`, measured in every
+    /// shape. `mean_stiffness` and `mean_square_length` give $\mu$ (module doc).
+    pub fn new(
+        shapes: &ShapeSet,
+        topology: &Topology,
+        options: &HingeOptions,
+        mean_stiffness: f64,
+        mean_square_length: f64,
+    ) -> Self {
+        let tris = shapes.triangles();
+        let flat: Vec<Vec<f64>> = shapes
+            .all_positions()
+            .iter()
+            .map(|p| p.iter().flatten().copied().collect())
+            .collect();
+        let diag = crate::mesh::bbox_diagonal(shapes.positions(0)).max(f64::MIN_POSITIVE);
+        let area_eps = 1e-12 * diag * diag;
+        let mu = options.weight * mean_stiffness * mean_square_length;
+        let mut out = Self {
+            hinges: Vec::new(),
+            weight: Vec::new(),
+            angle: vec![Vec::new(); shapes.len()],
+            len1: vec![Vec::new(); shapes.len()],
+            len2: vec![Vec::new(); shapes.len()],
+            floor1: Vec::new(),
+            floor2: Vec::new(),
+        };
+        if mu <= 0.0 {
+            return out;
+        }
+        'edges: for (k, &[a, b]) in topology.edges().iter().enumerate() {
+            let faces = topology.edge_faces(k);
+            if faces.len() != 2 {
+                continue;
+            }
+            let opposite = |f: u32| tris[f as usize].iter().copied().find(|&v| v != a && v != b);
+            let (Some(c), Some(d)) = (opposite(faces[0]), opposite(faces[1])) else {
+                continue;
+            };
+            if c == d {
+                continue;
+            }
+            let h = [a, b, c, d];
+            let mut m = Vec::with_capacity(shapes.len());
+            for x in &flat {
+                let (theta, l1, l2, le) = measure(x, h);
+                if l1 <= area_eps || l2 <= area_eps || le <= 1e-12 * diag {
+                    continue 'edges;
+                }
+                if theta.abs() > PI - options.min_fold_margin {
+                    continue 'edges;
+                }
+                m.push((theta, l1, l2));
+            }
+            let theta0 = m[0].0;
+            let (_, l1, l2, le) = measure(&flat[0], h);
+            let shape_factor = (2.0 * le * le / (l1 + l2)).min(options.max_shape_factor);
+            out.hinges.push(h);
+            out.weight.push(mu * shape_factor);
+            let (mut lo1, mut lo2) = (f64::INFINITY, f64::INFINITY);
+            for (s, &(theta, l1, l2)) in m.iter().enumerate() {
+                let mut d = theta - theta0;
+                d -= (2.0 * PI) * (d / (2.0 * PI)).round();
+                out.angle[s].push(theta0 + d);
+                out.len1[s].push(l1);
+                out.len2[s].push(l2);
+                lo1 = lo1.min(l1);
+                lo2 = lo2.min(l2);
+            }
+            out.floor1.push(0.05 * lo1);
+            out.floor2.push(0.05 * lo2);
+        }
+        out
+    }
+
+    /// Number of hinges.
+    pub fn len(&self) -> usize {
+        self.hinges.len()
+    }
+    /// True when there are no hinges.
+    pub fn is_empty(&self) -> bool {
+        self.hinges.is_empty()
+    }
+    /// The hinges `[a, b, c, d]` (edge `ab`, opposite vertices `c`, `d`).
+    pub fn hinges(&self) -> &[[u32; 4]] {
+        &self.hinges
+    }
+    /// Blended signed dihedral angle of every hinge for coefficients `c`.
+    pub fn blended_angles(&self, c: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; self.hinges.len()];
+        for (s, &w) in c.iter().enumerate() {
+            if w != 0.0 {
+                for (o, t) in out.iter_mut().zip(&self.angle[s]) {
+                    *o += w * t;
+                }
+            }
+        }
+        out
+    }
+    /// Signed dihedral angle of hinge `k` at positions `x`.
+    pub fn angle_at(&self, x: &[f64], k: usize) -> f64 {
+        measure(x, self.hinges[k]).0
+    }
+
+    /// Residual ρ and its Jacobian blocks (∂ρ/∂a, ∂ρ/∂b, ∂ρ/∂c, ∂ρ/∂d).
+    fn residual(&self, p: &[f64], x: &[f64], k: usize) -> (Vector3<f64>, [Matrix3<f64>; 4]) {
+        let h = self.hinges[k];
+        let (cs, sn, ib1, ib2) = (p[4 * k], p[4 * k + 1], p[4 * k + 2], p[4 * k + 3]);
+        let [a, b, c, d] = h.map(|v| v3(x, v));
+        let e = b - a;
+        let le = e.norm().max(f64::MIN_POSITIVE);
+        let eh = e / le;
+        let n1 = e.cross(&(c - a));
+        let n2 = (d - a).cross(&e);
+        let rot = Matrix3::identity() * cs + skew(&eh) * sn;
+        let rho = n2 * ib2 - rot * n1 * ib1;
+        let proj = (Matrix3::identity() - eh * eh.transpose()) / le;
+        let sn1 = skew(&n1) * sn;
+        let dn1 = [skew(&(c - b)), -skew(&(c - a)), skew(&e), Matrix3::zeros()];
+        let dn2 = [skew(&(b - d)), skew(&(d - a)), Matrix3::zeros(), -skew(&e)];
+        let de = [-proj, proj, Matrix3::zeros(), Matrix3::zeros()];
+        let j = std::array::from_fn(|v| dn2[v] * ib2 - (rot * dn1[v] - sn1 * de[v]) * ib1);
+        (rho, j)
+    }
+}
+
+impl EnergyTerm for HingeTerm {
+    fn name(&self) -> &'static str {
+        "hinges"
+    }
+
+    fn couplings(&self, out: &mut Vec<[u32; 2]>) {
+        for h in &self.hinges {
+            for u in 0..4 {
+                for v in u + 1..4 {
+                    out.push([h[u], h[v]]);
+                }
+            }
+        }
+    }
+
+    fn prepare(&self, c: &[f64]) -> TermParameters {
+        let m = self.hinges.len();
+        let theta = self.blended_angles(c);
+        let (mut b1, mut b2) = (vec![0.0; m], vec![0.0; m]);
+        for (s, &w) in c.iter().enumerate() {
+            if w != 0.0 {
+                for k in 0..m {
+                    b1[k] += w * self.len1[s][k];
+                    b2[k] += w * self.len2[s][k];
+                }
+            }
+        }
+        let mut values = Vec::with_capacity(4 * m);
+        let mut clamped = 0;
+        for k in 0..m {
+            if b1[k] < self.floor1[k] || b2[k] < self.floor2[k] {
+                clamped += 1;
+            }
+            values.extend_from_slice(&[
+                theta[k].cos(),
+                theta[k].sin(),
+                1.0 / b1[k].max(self.floor1[k]),
+                1.0 / b2[k].max(self.floor2[k]),
+            ]);
+        }
+        TermParameters { values, clamped }
+    }
+
+    fn energy(&self, p: &TermParameters, x: &[f64]) -> f64 {
+        (0..self.hinges.len())
+            .map(|k| self.weight[k] * self.residual(&p.values, x, k).0.norm_squared())
+            .sum()
+    }
+
+    fn add_gradient(&self, p: &TermParameters, x: &[f64], g: &mut [f64]) -> f64 {
+        let mut e = 0.0;
+        for k in 0..self.hinges.len() {
+            let (rho, j) = self.residual(&p.values, x, k);
+            let w = self.weight[k];
+            e += w * rho.norm_squared();
+            for (v, jv) in self.hinges[k].iter().zip(&j) {
+                let gv = jv.transpose() * rho * (2.0 * w);
+                let i = 3 * *v as usize;
+                g[i] += gv.x;
+                g[i + 1] += gv.y;
+                g[i + 2] += gv.z;
+            }
+        }
+        e
+    }
+
+    fn add_hessian(&self, p: &TermParameters, x: &[f64], _kind: HessianKind, h: &mut BlockHessian) {
+        for k in 0..self.hinges.len() {
+            let (_, j) = self.residual(&p.values, x, k);
+            let w = 2.0 * self.weight[k];
+            let hv = self.hinges[k];
+            for u in 0..4 {
+                for v in u..4 {
+                    let m = j[u].transpose() * j[v] * w;
+                    let b: Block = std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]));
+                    h.add(hv[u] as usize, hv[v] as usize, &b);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::check::{dense_hessian, gradient_error};
+    use super::*;
+    use crate::mesh::generate;
+    use rand::{Rng, SeedableRng};
+
+    fn setup() -> (HingeTerm, ShapeSet) {
+        let m = generate::tube(0.5, 2.0, 6, 4, false);
+        let bent = generate::bend(&m.positions, 1.0, 1.0, 1.5);
+        let set = ShapeSet::new(
+            m.clone(),
+            vec![("a".into(), m.positions.clone()), ("b".into(), bent)],
+        )
+        .unwrap();
+        let topo = Topology::new(m.num_vertices(), &m.triangles);
+        let term = HingeTerm::new(&set, &topo, &HingeOptions::default(), 1.0, 1.0);
+        (term, set)
+    }
+
+    #[test]
+    fn every_interior_edge_gets_a_hinge_and_each_shape_has_zero_energy() {
+        let (term, set) = setup();
+        let topo = Topology::new(set.num_vertices(), set.triangles());
+        let interior = (0..topo.edges().len())
+            .filter(|&e| topo.edge_faces(e).len() == 2)
+            .count();
+        assert_eq!(term.len(), interior);
+        for s in 0..2 {
+            let mut c = [0.0; 2];
+            c[s] = 1.0;
+            let p = term.prepare(&c);
+            let x: Vec<f64> = set.positions(s).iter().flatten().copied().collect();
+            let mut g = vec![0.0; x.len()];
+            let e = term.add_gradient(&p, &x, &mut g);
+            assert!(e < 1e-24, "energy {e}");
+            assert!(g.iter().all(|v| v.abs() < 1e-12));
+        }
+    }
+
+    #[test]
+    fn gradient_matches_finite_differences_and_hessian_is_gauss_newton() {
+        let (term, set) = setup();
+        let p = term.prepare(&[0.5, 0.5]);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let x: Vec<f64> = set
+            .positions(0)
+            .iter()
+            .flatten()
+            .map(|v| v + rng.random_range(-0.05..0.05))
+            .collect();
+        let (err, gmax) = gradient_error(&term, &p, &x);
+        assert!(err < 1e-7 * gmax.max(1.0), "FD error {err}, |g| {gmax}");
+        let hm = dense_hessian(&term, &p, &x, HessianKind::Exact);
+        // Gauss–Newton: symmetric positive semi-definite.
+        let n = x.len();
+        let dm = nalgebra::DMatrix::from_fn(n, n, |r, c| hm[r][c]);
+        assert!((&dm - dm.transpose()).norm() < 1e-12 * dm.norm());
+        let eig = dm.symmetric_eigenvalues();
+        assert!(
+            eig.min() > -1e-9 * eig.max(),
+            "min eigenvalue {}",
+            eig.min()
+        );
+    }
+
+    #[test]
+    fn a_mirror_flip_costs_energy_and_a_rotation_does_not() {
+        // Two triangles folded by +60°; the same fold mirrored (-60°) has the same
+        // 2-ring distance but a hinge energy of μ b |2 sin 60°|².
+        let fold = |t: f64| {
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.5, 1.0, 0.0],
+                [0.5, -t.cos(), t.sin()],
+            ]
+        };
+        let m = crate::mesh::TriMesh::new(fold(0.5), vec![[0, 1, 2], [1, 0, 3]]);
+        let set = ShapeSet::new(
+            m.clone(),
+            vec![("a".into(), fold(0.5)), ("b".into(), fold(0.5))],
+        )
+        .unwrap();
+        let topo = Topology::new(4, &m.triangles);
+        let term = HingeTerm::new(&set, &topo, &HingeOptions::default(), 100.0, 1.0);
+        assert_eq!(term.len(), 1);
+        let p = term.prepare(&[1.0, 0.0]);
+        let flat = |q: Vec<[f64; 3]>| q.into_iter().flatten().collect::<Vec<f64>>();
+        assert!(term.energy(&p, &flat(fold(0.5))) < 1e-20);
+        assert!(term.energy(&p, &flat(fold(-0.5))) > 0.1);
+        let turned = generate::rotate(&fold(0.5), [0.3, 0.2, 0.1], [1.0, 2.0, 3.0], 2.0);
+        assert!(term.energy(&p, &flat(turned)) < 1e-20);
+    }
+}

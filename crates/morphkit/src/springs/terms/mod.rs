@@ -1,0 +1,269 @@
+//! The blend energy as a sum of terms, $E(x) = \sum_t E_t(x; w)$.
+//!
+//! Every physical ingredient of the blend (distance springs, signed hinges, and later internal
+//! springs, anchor springs, soft pulls, contacts) is one [`EnergyTerm`]. A term declares once,
+//! at set-up, which vertex pairs its Hessian couples ([`EnergyTerm::couplings`]); the solver
+//! builds one sparsity pattern from all terms and runs the symbolic analysis once. Per weight
+//! vector a term computes its parameters ([`EnergyTerm::prepare`]: interpolated rest lengths,
+//! dihedral angles, …), then the Newton loop only asks for energy, gradient and Hessian blocks.
+//! The Newton loop never knows which terms exist.
+//!
+//! Conventions: positions are flattened, `x = [x₀, y₀, z₀, x₁, …]` (length `3 #V`); gradients
+//! have the same layout; Hessian blocks are 3×3, row-major, added with
+//! [`BlockHessian::add`]`(i, j, B)` meaning $\partial^2 E / \partial x_i \partial x_j \mathrel{+}= B$
+//! (and, by symmetry, $B^\top$ at `(j, i)`).
+
+mod hinge;
+mod spring;
+
+pub use hinge::{HingeOptions, HingeTerm};
+pub use spring::SpringTerm;
+
+/// A 3×3 block, row-major.
+pub type Block = [[f64; 3]; 3];
+
+/// Which Hessian the Newton loop asks for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HessianKind {
+    /// Positive semi-definite everywhere (compressed springs clamped, Gauss–Newton for
+    /// least-squares terms): safe to factorize with Cholesky.
+    Projected,
+    /// The true Hessian where the term can give it (it may be indefinite); terms whose exact
+    /// Hessian is not worth its cost may return their projected one.
+    Exact,
+}
+
+/// Per-frame parameters of one term, computed from the shape coefficients by
+/// [`EnergyTerm::prepare`]. The layout is private to the term.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TermParameters {
+    /// The term's numbers (rest lengths, angles, stiffnesses…).
+    pub values: Vec<f64>,
+    /// Elements whose interpolated parameter had to be clamped (extrapolated weights).
+    pub clamped: usize,
+}
+
+/// One additive piece of the blend energy.
+pub trait EnergyTerm: Send + Sync {
+    /// A short name for reports (`"springs"`, `"hinges"`).
+    fn name(&self) -> &'static str;
+    /// Every vertex pair `(i, j)`, `i ≠ j`, whose Hessian block this term may write. Called
+    /// once, at set-up.
+    fn couplings(&self, out: &mut Vec<[u32; 2]>);
+    /// The parameters for affine shape coefficients `c` (`Σ c = 1`, one per shape). Must
+    /// depend on `c` alone.
+    fn prepare(&self, c: &[f64]) -> TermParameters;
+    /// Adds $\nabla E_t(x)$ to `g` and returns $E_t(x)$.
+    fn add_gradient(&self, p: &TermParameters, x: &[f64], g: &mut [f64]) -> f64;
+    /// $E_t(x)$ alone.
+    fn energy(&self, p: &TermParameters, x: &[f64]) -> f64;
+    /// Adds the term's Hessian blocks at `x`.
+    fn add_hessian(&self, p: &TermParameters, x: &[f64], kind: HessianKind, h: &mut BlockHessian);
+}
+
+/// Vertex-level block sparsity: for each vertex, its sorted coupled neighbours of larger index.
+#[derive(Clone, Debug)]
+pub struct BlockPattern {
+    row_ptr: Vec<usize>,
+    cols: Vec<u32>,
+}
+
+impl BlockPattern {
+    /// The pattern holding every pair of `pairs` (either order) on `n` vertices.
+    pub fn new(n: usize, pairs: &[[u32; 2]]) -> Self {
+        let mut count = vec![0usize; n + 1];
+        for &[a, b] in pairs {
+            if a != b {
+                count[a.min(b) as usize + 1] += 1;
+            }
+        }
+        for k in 0..n {
+            count[k + 1] += count[k];
+        }
+        let mut fill = count.clone();
+        let mut cols = vec![0u32; count[n]];
+        for &[a, b] in pairs {
+            if a != b {
+                let r = a.min(b) as usize;
+                cols[fill[r]] = a.max(b);
+                fill[r] += 1;
+            }
+        }
+        // Sort and deduplicate each row, compacting in place.
+        let mut row_ptr = vec![0usize; n + 1];
+        let mut out = 0;
+        for r in 0..n {
+            let row = &mut cols[count[r]..count[r + 1]];
+            row.sort_unstable();
+            let mut last = u32::MAX;
+            for k in count[r]..count[r + 1] {
+                let c = cols[k];
+                if c != last {
+                    cols[out] = c;
+                    out += 1;
+                    last = c;
+                }
+            }
+            row_ptr[r + 1] = out;
+        }
+        cols.truncate(out);
+        Self { row_ptr, cols }
+    }
+    /// Number of vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.row_ptr.len() - 1
+    }
+    /// Number of off-diagonal (upper) blocks.
+    pub fn num_pairs(&self) -> usize {
+        self.cols.len()
+    }
+    /// Neighbours `j > i` of vertex `i`, sorted.
+    pub fn row(&self, i: usize) -> &[u32] {
+        &self.cols[self.row_ptr[i]..self.row_ptr[i + 1]]
+    }
+    /// Index of the block of pair `(i, j)`, `i < j`.
+    #[inline]
+    pub fn pair_index(&self, i: usize, j: usize) -> Option<usize> {
+        let row = self.row(i);
+        row.binary_search(&(j as u32))
+            .ok()
+            .map(|k| self.row_ptr[i] + k)
+    }
+    /// Offset of row `i` in the pair list.
+    pub(crate) fn row_start(&self, i: usize) -> usize {
+        self.row_ptr[i]
+    }
+}
+
+/// Hessian values on a [`BlockPattern`]: one full 3×3 block per vertex (diagonal) and one per
+/// coupled pair `(i, j)`, `i < j`, holding $\partial^2 E/\partial x_i \partial x_j$.
+#[derive(Clone, Debug)]
+pub struct BlockHessian {
+    pattern: std::sync::Arc<BlockPattern>,
+    /// Diagonal blocks, `#V`.
+    pub diag: Vec<Block>,
+    /// Off-diagonal blocks in pattern order.
+    pub off: Vec<Block>,
+}
+
+impl BlockHessian {
+    /// Zero values for `pattern`.
+    pub fn zeros(pattern: std::sync::Arc<BlockPattern>) -> Self {
+        Self {
+            diag: vec![[[0.0; 3]; 3]; pattern.num_vertices()],
+            off: vec![[[0.0; 3]; 3]; pattern.num_pairs()],
+            pattern,
+        }
+    }
+    /// The pattern.
+    pub fn pattern(&self) -> &BlockPattern {
+        &self.pattern
+    }
+    /// Sets every value to zero.
+    pub fn clear(&mut self) {
+        self.diag.iter_mut().for_each(|b| *b = [[0.0; 3]; 3]);
+        self.off.iter_mut().for_each(|b| *b = [[0.0; 3]; 3]);
+    }
+    /// $H_{ij} \mathrel{+}= B$ (and $H_{ji} \mathrel{+}= B^\top$). A pair missing from the
+    /// pattern is a programming error of the term (it did not declare it) and panics in debug
+    /// builds; release builds drop it.
+    #[inline]
+    pub fn add(&mut self, i: usize, j: usize, b: &Block) {
+        if i == j {
+            add_block(&mut self.diag[i], b, false);
+            return;
+        }
+        let (r, c, transpose) = if i < j { (i, j, false) } else { (j, i, true) };
+        match self.pattern.pair_index(r, c) {
+            Some(k) => add_block(&mut self.off[k], b, transpose),
+            None => debug_assert!(false, "pair ({i}, {j}) was not declared"),
+        }
+    }
+}
+
+#[inline]
+fn add_block(dst: &mut Block, b: &Block, transpose: bool) {
+    for a in 0..3 {
+        for c in 0..3 {
+            dst[a][c] += if transpose { b[c][a] } else { b[a][c] };
+        }
+    }
+}
+
+/// Total energy of `terms`.
+pub fn total_energy(terms: &[Box<dyn EnergyTerm>], params: &[TermParameters], x: &[f64]) -> f64 {
+    terms.iter().zip(params).map(|(t, p)| t.energy(p, x)).sum()
+}
+
+/// Writes the total gradient into `g` and returns the total energy.
+pub fn total_gradient(
+    terms: &[Box<dyn EnergyTerm>],
+    params: &[TermParameters],
+    x: &[f64],
+    g: &mut [f64],
+) -> f64 {
+    g.iter_mut().for_each(|v| *v = 0.0);
+    terms
+        .iter()
+        .zip(params)
+        .map(|(t, p)| t.add_gradient(p, x, g))
+        .sum()
+}
+
+#[cfg(test)]
+pub(crate) mod check {
+    //! Finite-difference checks shared by the term tests.
+    use super::*;
+
+    /// Max abs difference between the analytic gradient and central differences.
+    pub fn gradient_error(t: &dyn EnergyTerm, p: &TermParameters, x: &[f64]) -> (f64, f64) {
+        let mut g = vec![0.0; x.len()];
+        let e = t.add_gradient(p, x, &mut g);
+        assert!((e - t.energy(p, x)).abs() <= 1e-12 * e.abs().max(1e-300));
+        let h = 1e-6;
+        let mut worst: f64 = 0.0;
+        for k in 0..x.len() {
+            let mut xp = x.to_vec();
+            let mut xm = x.to_vec();
+            xp[k] += h;
+            xm[k] -= h;
+            let fd = (t.energy(p, &xp) - t.energy(p, &xm)) / (2.0 * h);
+            worst = worst.max((fd - g[k]).abs());
+        }
+        (worst, g.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+    }
+
+    /// Dense Hessian of `t` from its blocks.
+    pub fn dense_hessian(
+        t: &dyn EnergyTerm,
+        p: &TermParameters,
+        x: &[f64],
+        kind: HessianKind,
+    ) -> Vec<Vec<f64>> {
+        let n = x.len() / 3;
+        let mut pairs = Vec::new();
+        t.couplings(&mut pairs);
+        let pattern = std::sync::Arc::new(BlockPattern::new(n, &pairs));
+        let mut h = BlockHessian::zeros(pattern.clone());
+        t.add_hessian(p, x, kind, &mut h);
+        let mut m = vec![vec![0.0; 3 * n]; 3 * n];
+        for i in 0..n {
+            for a in 0..3 {
+                for c in 0..3 {
+                    m[3 * i + a][3 * i + c] += h.diag[i][a][c];
+                }
+            }
+            for (k, &j) in pattern.row(i).iter().enumerate() {
+                let b = &h.off[pattern.row_start(i) + k];
+                let j = j as usize;
+                for a in 0..3 {
+                    for c in 0..3 {
+                        m[3 * i + a][3 * j + c] += b[a][c];
+                        m[3 * j + c][3 * i + a] += b[a][c];
+                    }
+                }
+            }
+        }
+        m
+    }
+}

@@ -1,0 +1,274 @@
+//! Distance springs with blended rest lengths (Ma et al. 2012, Eq. 1–5 and Sec. 3.5, with the
+//! corrected Hessian of the math notes §1; the paper's Eq. 5 as printed is wrong).
+//!
+//! For spring $q = (i, j)$ with $d = x_i - x_j$, $l = \lVert d\rVert$, $\hat d = d / l$, rest
+//! length $\bar r = \sum_s c_s r^s$ and stiffness $k$:
+//!
+//! - energy $E_q = \tfrac12 k (l - \bar r)^2$;
+//! - gradient $\partial E_q / \partial x_i = k (l - \bar r) \hat d = -\partial E_q / \partial x_j$;
+//! - Hessian block $K = k \left[(1 - \bar r/l)(I - \hat d \hat d^\top) + \hat d \hat d^\top\right]$
+//!   at $(i,i)$ and $(j,j)$, $-K$ at $(i,j)$. The projected block clamps $(1 - \bar r/l)$ at 0.
+//!
+//! Stiffness is $k_q = k_0 s_q / \max(\bar r_q, f \max_s r^s_q)$ for the paper's
+//! $k = k_0 / \bar r$ rule ($s_q$ = 1, or the bending multiplier; $f$ = `min_rest_fraction`),
+//! so a spring that shrinks to nothing in some shape keeps a finite stiffness. The rest length
+//! is clamped below at $f \min_s r^s_q$; convex weights never reach that floor, so a one-hot
+//! weight vector reproduces that shape's rest lengths exactly. Only extrapolated weights clamp,
+//! and the count is reported.
+
+use super::{BlockHessian, EnergyTerm, HessianKind, TermParameters};
+use crate::springs::{SpringSet, StiffnessRule};
+
+/// The springs of a [`SpringSet`] as an energy term. Parameters: `[r̄ (m) | k (m)]`.
+pub struct SpringTerm {
+    set: SpringSet,
+    rest_floor: Vec<f64>,
+    stiffness_floor: Vec<f64>,
+}
+
+impl SpringTerm {
+    /// Wraps `set`; `min_rest_fraction` is the `f` of the module doc.
+    pub fn new(set: SpringSet, min_rest_fraction: f64) -> Self {
+        let m = set.len();
+        let mut lo = vec![f64::INFINITY; m];
+        let mut hi = vec![0.0f64; m];
+        for s in 0..set.num_shapes() {
+            for (q, &r) in set.rest_lengths(s).iter().enumerate() {
+                lo[q] = lo[q].min(r);
+                hi[q] = hi[q].max(r);
+            }
+        }
+        Self {
+            rest_floor: lo.iter().map(|v| min_rest_fraction * v).collect(),
+            stiffness_floor: hi
+                .iter()
+                .map(|v| (min_rest_fraction * v).max(f64::MIN_POSITIVE * 1e10))
+                .collect(),
+            set,
+        }
+    }
+
+    /// The spring set.
+    pub fn set(&self) -> &SpringSet {
+        &self.set
+    }
+}
+
+#[inline]
+fn diff(x: &[f64], i: usize, j: usize) -> [f64; 3] {
+    [
+        x[3 * i] - x[3 * j],
+        x[3 * i + 1] - x[3 * j + 1],
+        x[3 * i + 2] - x[3 * j + 2],
+    ]
+}
+
+/// Hessian block of one spring with `d = x_i − x_j`; `projected` clamps the transverse
+/// coefficient at zero. A zero-length spring gets $k I$ (the limit of the projected block's
+/// trace average), so that no NaN can arise.
+#[inline]
+pub fn spring_block(d: [f64; 3], r: f64, k: f64, projected: bool) -> super::Block {
+    let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if l <= 1e-300 {
+        return [[k, 0.0, 0.0], [0.0, k, 0.0], [0.0, 0.0, k]];
+    }
+    let u = [d[0] / l, d[1] / l, d[2] / l];
+    let mut t = 1.0 - r / l;
+    if projected {
+        t = t.max(0.0);
+    }
+    let mut b = [[0.0; 3]; 3];
+    for a in 0..3 {
+        for c in 0..3 {
+            let uu = u[a] * u[c];
+            let id = if a == c { 1.0 } else { 0.0 };
+            b[a][c] = k * (t * (id - uu) + uu);
+        }
+    }
+    b
+}
+
+impl EnergyTerm for SpringTerm {
+    fn name(&self) -> &'static str {
+        "springs"
+    }
+
+    fn couplings(&self, out: &mut Vec<[u32; 2]>) {
+        out.extend(self.set.springs().iter().map(|s| [s.i, s.j]));
+    }
+
+    fn prepare(&self, c: &[f64]) -> TermParameters {
+        let m = self.set.len();
+        let mut values = vec![0.0; 2 * m];
+        let (rest, k) = values.split_at_mut(m);
+        for (s, &w) in c.iter().enumerate() {
+            if w != 0.0 {
+                for (v, r) in rest.iter_mut().zip(self.set.rest_lengths(s)) {
+                    *v += w * r;
+                }
+            }
+        }
+        let mut clamped = 0;
+        let inverse = self.set.options().stiffness == StiffnessRule::InverseRestLength;
+        for q in 0..m {
+            if rest[q] < self.rest_floor[q] {
+                rest[q] = self.rest_floor[q];
+                clamped += 1;
+            }
+            let scale = self.set.stiffness_scale(q);
+            k[q] = if inverse {
+                scale / rest[q].max(self.stiffness_floor[q])
+            } else {
+                scale
+            };
+        }
+        TermParameters { values, clamped }
+    }
+
+    fn energy(&self, p: &TermParameters, x: &[f64]) -> f64 {
+        let m = self.set.len();
+        let (rest, k) = p.values.split_at(m);
+        self.set
+            .springs()
+            .iter()
+            .enumerate()
+            .map(|(q, s)| {
+                let d = diff(x, s.i as usize, s.j as usize);
+                let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                0.5 * k[q] * (l - rest[q]) * (l - rest[q])
+            })
+            .sum()
+    }
+
+    fn add_gradient(&self, p: &TermParameters, x: &[f64], g: &mut [f64]) -> f64 {
+        let m = self.set.len();
+        let (rest, k) = p.values.split_at(m);
+        let mut e = 0.0;
+        for (q, s) in self.set.springs().iter().enumerate() {
+            let (i, j) = (s.i as usize, s.j as usize);
+            let d = diff(x, i, j);
+            let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let r = rest[q];
+            e += 0.5 * k[q] * (l - r) * (l - r);
+            if l > 0.0 {
+                let f = k[q] * (l - r) / l;
+                for a in 0..3 {
+                    g[3 * i + a] += f * d[a];
+                    g[3 * j + a] -= f * d[a];
+                }
+            }
+        }
+        e
+    }
+
+    fn add_hessian(&self, p: &TermParameters, x: &[f64], kind: HessianKind, h: &mut BlockHessian) {
+        let m = self.set.len();
+        let (rest, k) = p.values.split_at(m);
+        let projected = kind == HessianKind::Projected;
+        for (q, s) in self.set.springs().iter().enumerate() {
+            let (i, j) = (s.i as usize, s.j as usize);
+            let b = spring_block(diff(x, i, j), rest[q], k[q], projected);
+            h.add(i, i, &b);
+            h.add(j, j, &b);
+            let neg = b.map(|row| row.map(|v| -v));
+            h.add(i, j, &neg);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::check::{dense_hessian, gradient_error};
+    use super::*;
+    use crate::mesh::{generate, ShapeSet, Topology};
+    use crate::springs::SpringOptions;
+    use rand::{Rng, SeedableRng};
+
+    fn setup(rule: StiffnessRule) -> (SpringTerm, TermParameters, Vec<f64>) {
+        let m = generate::tube(0.5, 2.0, 6, 4, true);
+        let bent = generate::bend(&m.positions, 1.0, 1.0, 1.5);
+        let set = ShapeSet::new(
+            m.clone(),
+            vec![("a".into(), m.positions.clone()), ("b".into(), bent)],
+        )
+        .unwrap();
+        let topo = Topology::new(m.num_vertices(), &m.triangles);
+        let springs = SpringSet::new(
+            &set,
+            &topo,
+            &SpringOptions {
+                stiffness: rule,
+                k0: 2.5,
+                ..Default::default()
+            },
+        );
+        let term = SpringTerm::new(springs, 0.05);
+        let p = term.prepare(&[0.5, 0.5]);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let x: Vec<f64> = m
+            .positions
+            .iter()
+            .flatten()
+            .map(|v| v + rng.random_range(-0.05..0.05))
+            .collect();
+        (term, p, x)
+    }
+
+    #[test]
+    fn gradient_and_exact_hessian_match_finite_differences() {
+        for rule in [StiffnessRule::InverseRestLength, StiffnessRule::Uniform] {
+            let (term, p, x) = setup(rule);
+            let (err, gmax) = gradient_error(&term, &p, &x);
+            assert!(err < 1e-7 * gmax.max(1.0), "gradient FD error {err}");
+        }
+        let (term, p, x) = setup(StiffnessRule::InverseRestLength);
+        let hm = dense_hessian(&term, &p, &x, HessianKind::Exact);
+        let n = x.len();
+        let (mut gp, mut gm) = (vec![0.0; n], vec![0.0; n]);
+        let mut worst: f64 = 0.0;
+        for k in 0..n {
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[k] += 1e-6;
+            xm[k] -= 1e-6;
+            gp.iter_mut().for_each(|v| *v = 0.0);
+            gm.iter_mut().for_each(|v| *v = 0.0);
+            term.add_gradient(&p, &xp, &mut gp);
+            term.add_gradient(&p, &xm, &mut gm);
+            for r in 0..n {
+                worst = worst.max(((gp[r] - gm[r]) / 2e-6 - hm[r][k]).abs());
+            }
+        }
+        assert!(worst < 1e-6, "Hessian FD error {worst}");
+    }
+
+    #[test]
+    fn projected_block_is_positive_semidefinite_and_exact_is_not() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        for _ in 0..200 {
+            let d = [
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            ];
+            let b = spring_block(d, rng.random_range(0.0..3.0), 1.3, true);
+            let m = nalgebra::Matrix3::from_fn(|a, c| b[a][c]);
+            assert!(m.symmetric_eigenvalues().min() > -1e-12);
+        }
+        let b = spring_block([0.5, 0.0, 0.0], 1.0, 1.0, false);
+        assert!(b[1][1] < 0.0);
+    }
+
+    #[test]
+    fn one_hot_weights_reproduce_each_shape_unclamped() {
+        let (term, _, _) = setup(StiffnessRule::InverseRestLength);
+        for s in 0..2 {
+            let mut c = [0.0; 2];
+            c[s] = 1.0;
+            let p = term.prepare(&c);
+            assert_eq!(p.clamped, 0);
+            assert_eq!(&p.values[..term.set().len()], term.set().rest_lengths(s));
+        }
+        let p = term.prepare(&[40.0, -39.0]);
+        assert!(p.values.iter().all(|v| *v > 0.0 && v.is_finite()));
+    }
+}

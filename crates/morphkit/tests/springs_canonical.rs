@@ -1,0 +1,237 @@
+//! The canonical physical blend on generated meshes: exact endpoints, a result that depends on
+//! the weights alone (order, threads, repeated runs), continuity along a sequence, no flying
+//! parts, the large-stretch "slit that opens" case, and refusals of degenerate or too large
+//! input.
+
+use morphkit::mesh::{bbox_diagonal, generate, Point, ShapeSet, Topology, TriMesh};
+use morphkit::springs::{
+    fold_metrics, linear_blend, BlendError, BlendOptions, FixedVertices, PhysicalBlend, Weights,
+};
+
+fn dist(a: Point, b: Point) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+fn max_dist(a: &[Point], b: &[Point]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| dist(*p, *q))
+        .fold(0.0, f64::max)
+}
+
+fn bent_bar(angle_deg: f64) -> ShapeSet {
+    let m = generate::bar(4.0, 0.6, 2, 24);
+    let b = generate::bend(&m.positions, 2.0, 2.0, angle_deg.to_radians());
+    ShapeSet::new(
+        m.clone(),
+        vec![("straight".into(), m.positions.clone()), ("bent".into(), b)],
+    )
+    .unwrap()
+}
+
+/// A curved patch with a closed slit: rows `m` and `m + 1` are `ε` apart in the base (a strip
+/// of sliver triangles, like closed lips); the target opens the slit wide in its middle
+/// (tenfold and far more) and pushes the lips forward. The left and right columns are static.
+pub fn slit_patch() -> ShapeSet {
+    let (nx, ny) = (40usize, 20usize);
+    let m = generate::grid(nx, ny, 2.0, 1.0);
+    let row = |v: usize| v / (nx + 1);
+    let mid = ny / 2;
+    let h = 1.0 / ny as f64;
+    let eps = 0.02 * h;
+    let base: Vec<Point> = m
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(v, p)| {
+            // Squeeze the strip between rows mid and mid + 1 to ε.
+            let j = row(v);
+            let y = if j <= mid {
+                p[1] * (0.5 - eps / 2.0) / (mid as f64 * h)
+            } else {
+                0.5 + eps / 2.0 + (p[1] - (mid + 1) as f64 * h) * (0.5 - eps / 2.0) / (0.5 - h)
+            };
+            let z = 0.2 * (std::f64::consts::PI * p[0] / 2.0).sin();
+            [p[0], y, z]
+        })
+        .collect();
+    let target: Vec<Point> = base
+        .iter()
+        .enumerate()
+        .map(|(v, p)| {
+            let bump = (std::f64::consts::PI * p[0] / 2.0).sin().powi(2);
+            let side = if row(v) <= mid { -1.0 } else { 1.0 };
+            let near = (-((p[1] - 0.5) / 0.15).powi(2)).exp();
+            [
+                p[0],
+                p[1] + side * 0.15 * bump * near,
+                p[2] + 0.1 * bump * near,
+            ]
+        })
+        .collect();
+    let mesh = TriMesh::new(base.clone(), m.triangles.clone());
+    ShapeSet::new(mesh, vec![("closed".into(), base), ("open".into(), target)]).unwrap()
+}
+
+#[test]
+fn one_hot_weights_reproduce_every_shape_in_zero_iterations() {
+    let m = generate::tube(0.5, 4.0, 12, 16, true);
+    let s = ShapeSet::new(
+        m.clone(),
+        vec![
+            ("b".into(), m.positions.clone()),
+            ("t1".into(), generate::bend(&m.positions, 2.0, 2.0, 1.9)),
+            ("t2".into(), generate::bend(&m.positions, 1.0, 3.0, -2.5)),
+        ],
+    )
+    .unwrap();
+    let d = bbox_diagonal(&m.positions);
+    for fixed in [FixedVertices::Auto, FixedVertices::None] {
+        let opts = BlendOptions {
+            fixed: fixed.clone(),
+            ..Default::default()
+        };
+        let mut solver = PhysicalBlend::new(&s, &opts).unwrap();
+        let cases = [
+            (Weights::Delta(vec![0.0, 0.0]), 0),
+            (Weights::Delta(vec![1.0, 0.0]), 1),
+            (Weights::Delta(vec![0.0, 1.0]), 2),
+            (Weights::Convex(vec![1.0, 0.0, 0.0]), 0),
+            (Weights::Convex(vec![0.0, 0.0, 1.0]), 2),
+        ];
+        for (w, shape) in cases {
+            let r = solver.solve(&w).unwrap();
+            let err = max_dist(&r.positions, s.positions(shape));
+            assert!(err <= 1e-9 * d, "{fixed:?} {w:?}: {err}");
+            assert_eq!(r.stats.newton_iterations, 0, "{w:?}");
+            assert!(r.stats.converged);
+        }
+    }
+}
+
+#[test]
+fn a_frame_depends_on_its_weights_alone() {
+    let s = bent_bar(150.0);
+    let alphas: Vec<f64> = (0..9).map(|k| k as f64 / 8.0).collect();
+    let forward: Vec<Weights> = alphas.iter().map(|&a| Weights::Alpha(a)).collect();
+    let mut solver = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap();
+    let seq: Vec<Vec<Point>> = forward
+        .iter()
+        .map(|w| solver.solve(w).unwrap().positions)
+        .collect();
+    // Reversed, shuffled, in parallel, and with a fresh solver: the same bits.
+    let order = [4usize, 8, 0, 6, 2, 7, 1, 5, 3];
+    let shuffled: Vec<Weights> = order.iter().map(|&k| forward[k].clone()).collect();
+    let par = solver.solve_many(&shuffled, 3);
+    for (r, &k) in par.iter().zip(&order) {
+        assert_eq!(r.as_ref().unwrap().positions, seq[k], "frame {k}");
+    }
+    let mut fresh = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap();
+    for k in (0..9).rev() {
+        assert_eq!(fresh.solve(&forward[k]).unwrap().positions, seq[k]);
+    }
+    // Scrubbing away and back lands on the same frame.
+    solver.solve(&Weights::Alpha(0.93)).unwrap();
+    assert_eq!(solver.solve(&forward[4]).unwrap().positions, seq[4]);
+}
+
+/// Consecutive frames of a 36-step sequence move no vertex by more than 4 × the largest
+/// per-step move of the linear blend. Justification: a vertex carried along an arc of angle
+/// θ ≤ π travels at most θ / (2 sin θ/2) ≤ π/2 times its chord, and the equilibrium may move
+/// up to twice as fast in α as uniformly (rest lengths are linear in α, positions are not):
+/// 2 · π/2 ≈ 3.1 < 4. A jump to another basin moves vertices by a large part of the shape in
+/// one step, far above this bound.
+#[test]
+fn sequences_are_continuous_without_flying_parts() {
+    for s in [bent_bar(150.0), slit_patch()] {
+        let topo = Topology::new(s.num_vertices(), s.triangles());
+        let mut solver = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap();
+        let n = 36;
+        let weights: Vec<Weights> = (0..n)
+            .map(|k| Weights::Alpha(k as f64 / (n - 1) as f64))
+            .collect();
+        let frames: Vec<Vec<Point>> = solver
+            .solve_many(&weights, 2)
+            .into_iter()
+            .enumerate()
+            .map(|(k, r)| {
+                let r = r.unwrap();
+                assert!(r.stats.converged, "frame {k}: {:?}", r.stats);
+                r.positions
+            })
+            .collect();
+        let linear_step = max_dist(s.positions(0), s.positions(1)) / (n - 1) as f64;
+        for k in 1..n {
+            let step = max_dist(&frames[k], &frames[k - 1]);
+            assert!(
+                step <= 4.0 * linear_step,
+                "frame {k}: step {step}, linear step {linear_step}"
+            );
+        }
+        for (k, f) in frames.iter().enumerate() {
+            let q = fold_metrics(&s, &topo, &weights[k], f).unwrap();
+            assert!(
+                q.max_from_linear <= 0.5 * q.largest_move,
+                "frame {k}: {q:?}"
+            );
+            assert!(q.folds <= q.folds_linear, "frame {k}: {q:?}");
+        }
+    }
+}
+
+#[test]
+fn an_opening_slit_is_kinematic_and_converges() {
+    let s = slit_patch();
+    let solver = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap();
+    let sum = solver.summary();
+    // The strip's two rows in the middle open far beyond 3×.
+    assert!(sum.kinematic_vertices >= 20, "{sum:?}");
+    assert!(sum.kinematic_vertices < s.num_vertices() / 4, "{sum:?}");
+    // Without the kinematic treatment the strip is a material stretched tenfold.
+    let stiff = PhysicalBlend::new(
+        &s,
+        &BlendOptions {
+            kinematic_stretch: f64::INFINITY,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(stiff.summary().kinematic_vertices, 0);
+    let lin = linear_blend(&s, &Weights::Alpha(1.0)).unwrap();
+    let mut solver = solver;
+    let r = solver.solve(&Weights::Alpha(1.0)).unwrap();
+    assert!(max_dist(&r.positions, &lin) <= 1e-9 * bbox_diagonal(&lin));
+}
+
+#[test]
+fn degenerate_or_too_large_input_is_refused() {
+    let m = generate::grid(4, 4, 1.0, 1.0);
+    let point = vec![[0.5, 0.5, 0.0]; m.num_vertices()];
+    let s = ShapeSet::new(
+        m.clone(),
+        vec![("flat".into(), point), ("grid".into(), m.positions.clone())],
+    )
+    .unwrap();
+    let e = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap_err();
+    assert!(matches!(e, BlendError::DegenerateShape { .. }), "{e}");
+    assert!(e.to_string().contains("'flat'"), "{e}");
+    let big = generate::grid(60, 60, 1.0, 1.0);
+    let s = ShapeSet::new(
+        big.clone(),
+        vec![
+            ("a".into(), big.positions.clone()),
+            ("b".into(), generate::bend(&big.positions, 0.5, 0.5, 1.0)),
+        ],
+    )
+    .unwrap();
+    let e = PhysicalBlend::new(
+        &s,
+        &BlendOptions {
+            max_memory_bytes: 1 << 20,
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(matches!(e, BlendError::TooLarge { .. }), "{e}");
+    assert!(e.to_string().contains("GiB"), "{e}");
+}
