@@ -235,3 +235,57 @@ fn degenerate_or_too_large_input_is_refused() {
     assert!(matches!(e, BlendError::TooLarge { .. }), "{e}");
     assert!(e.to_string().contains("GiB"), "{e}");
 }
+
+/// Fig. 5 of Ma et al.: a vertex pulled by hand drags its neighbourhood along; the fixed part
+/// stays, the pull reaches its position, and the displacement decays with distance.
+#[test]
+fn a_hard_pull_moves_its_vertex_and_the_fixed_part_stays() {
+    use morphkit::springs::PointTarget;
+    let m = generate::grid(20, 10, 2.0, 1.0);
+    let s = ShapeSet::new(
+        m.clone(),
+        vec![
+            ("a".into(), m.positions.clone()),
+            ("b".into(), m.positions.clone()),
+        ],
+    )
+    .unwrap();
+    let fixed: Vec<u32> = (0..m.num_vertices() as u32)
+        .filter(|&v| m.positions[v as usize][0] < 0.15)
+        .collect();
+    let opts = BlendOptions {
+        fixed: FixedVertices::Ids(fixed.clone()),
+        ..Default::default()
+    };
+    let mut solver = PhysicalBlend::new(&s, &opts).unwrap();
+    let corner = 20u32 + 5 * 21; // x = 2, y = 0.5: the free end's middle
+    let goal = [2.0, 0.5, 0.6];
+    let r = solver
+        .solve_with(
+            &Weights::Alpha(0.5),
+            &[PointTarget::hard(corner, goal)],
+            None,
+        )
+        .unwrap();
+    assert!(r.stats.converged, "{:?}", r.stats);
+    assert!(dist(r.positions[corner as usize], goal) < 1e-5);
+    for &v in &fixed {
+        assert_eq!(r.positions[v as usize], m.positions[v as usize]);
+    }
+    // Displacement along the middle row decays from the pulled end to the fixed one.
+    let row: Vec<f64> = (0..=20)
+        .map(|i| dist(r.positions[5 * 21 + i], m.positions[5 * 21 + i]))
+        .collect();
+    for i in 1..row.len() {
+        assert!(row[i] >= row[i - 1] - 1e-9, "row {row:?}");
+    }
+    // No targets: the plain blend.
+    let plain = solver.solve(&Weights::Alpha(0.5)).unwrap();
+    assert_eq!(
+        solver
+            .solve_with(&Weights::Alpha(0.5), &[], None)
+            .unwrap()
+            .positions,
+        plain.positions
+    );
+}

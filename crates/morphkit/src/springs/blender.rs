@@ -6,7 +6,10 @@ use super::constraints::{stretched_vertices, Constraints};
 use super::newton::{projected_newton, trust_region, Problem, Workspace};
 use super::options::{BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary};
 use super::system::{expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem};
-use super::terms::{BlockHessian, BlockPattern, EnergyTerm, HingeTerm, SpringTerm};
+use super::terms::{
+    BlockHessian, BlockPattern, EnergyTerm, HingeTerm, PointTarget, PointTerm, SpringTerm,
+    TermParameters,
+};
 use super::{predictor, BlendError, FillOrdering, SpringKind, SpringSet, StiffnessRule, Weights};
 use crate::mesh::{validate, ShapeSet, Topology};
 use crate::sparse::Ordering;
@@ -29,6 +32,8 @@ struct Rig {
     system: FreeSystem,
     options: BlendOptions,
     tolerance: f64,
+    /// Mean structure-spring stiffness on the base (the unit of point-target stiffness).
+    mean_stiffness: f64,
     summary: RigSummary,
 }
 
@@ -226,6 +231,7 @@ impl PhysicalBlend {
                 system,
                 options: o.clone(),
                 tolerance,
+                mean_stiffness: ksum / count,
                 summary,
             },
             ws,
@@ -267,7 +273,22 @@ impl PhysicalBlend {
     /// best state found, with `stats.converged == false` and the failing vertices in
     /// `stats.unconverged_vertices`; it never returns NaNs.
     pub fn solve(&mut self, weights: &Weights) -> Result<BlendResult, BlendError> {
-        self.rig.solve(&mut self.ws, weights)
+        self.rig.solve(&mut self.ws, weights, &[], None)
+    }
+
+    /// The equilibrium for `weights` with vertices pulled towards point targets (pulled
+    /// vertices, contacts; Ma et al. Sec. 4), starting from `start` (world positions, `#V`)
+    /// instead of the predictor when given: a collision round continues from the previous
+    /// round of the same frame. Targets must lie on components held by fixed vertices (a
+    /// gauged component has no world position to pull against); targets on fixed vertices
+    /// have no effect.
+    pub fn solve_with(
+        &mut self,
+        weights: &Weights,
+        targets: &[PointTarget],
+        start: Option<&[crate::mesh::Point]>,
+    ) -> Result<BlendResult, BlendError> {
+        self.rig.solve(&mut self.ws, weights, targets, start)
     }
 
     /// Solves every weight vector, spread over up to `threads` threads (each with its own
@@ -301,12 +322,12 @@ impl PhysicalBlend {
                 handles.push(scope.spawn(move || {
                     (t + 1..weights.len())
                         .step_by(stride)
-                        .map(|k| (k, rig.solve(&mut ws, &weights[k])))
+                        .map(|k| (k, rig.solve(&mut ws, &weights[k], &[], None)))
                         .collect::<Vec<_>>()
                 }));
             }
             for k in (0..weights.len()).step_by(stride) {
-                slots[k] = Some(rig.solve(&mut self.ws, &weights[k]));
+                slots[k] = Some(rig.solve(&mut self.ws, &weights[k], &[], None));
             }
             for h in handles {
                 if let Ok(done) = h.join() {
@@ -327,14 +348,70 @@ impl PhysicalBlend {
 }
 
 impl Rig {
-    fn solve(&self, ws: &mut Workspace, weights: &Weights) -> Result<BlendResult, BlendError> {
+    fn check_targets(&self, targets: &[PointTarget]) -> Result<(), BlendError> {
+        let n = self.shapes.num_vertices();
+        for t in targets {
+            let v = t.vertex as usize;
+            if v >= n {
+                return Err(BlendError::TargetOutOfRange {
+                    vertex: t.vertex,
+                    num_vertices: n,
+                });
+            }
+            if !(t.stiffness.is_finite() && t.stiffness > 0.0)
+                || t.position.iter().any(|c| !c.is_finite())
+            {
+                return Err(BlendError::InvalidOption(format!(
+                    "the target of vertex {v} needs a finite position and a finite positive stiffness"
+                )));
+            }
+            if self
+                .constraints
+                .gauges
+                .iter()
+                .any(|g| g.vertices.binary_search(&t.vertex).is_ok())
+            {
+                return Err(BlendError::TargetOnFreeComponent { vertex: t.vertex });
+            }
+        }
+        Ok(())
+    }
+
+    fn solve(
+        &self,
+        ws: &mut Workspace,
+        weights: &Weights,
+        targets: &[PointTarget],
+        start_from: Option<&[crate::mesh::Point]>,
+    ) -> Result<BlendResult, BlendError> {
         let start = Instant::now();
         let c = weights.coefficients(self.shapes.len())?;
-        let params: Vec<_> = self.terms.iter().map(|t| t.prepare(&c)).collect();
+        self.check_targets(targets)?;
+        if start_from.is_some_and(|p| p.len() != self.shapes.num_vertices()) {
+            return Err(BlendError::InvalidOption(
+                "the start positions must have one point per vertex".into(),
+            ));
+        }
+        let points = PointTerm {
+            targets,
+            scale: self.mean_stiffness,
+        };
+        let mut terms: Vec<&dyn EnergyTerm> = self.terms.iter().map(|t| t.as_ref()).collect();
+        let mut params: Vec<TermParameters> = self.terms.iter().map(|t| t.prepare(&c)).collect();
+        if !targets.is_empty() {
+            terms.push(&points);
+            params.push(TermParameters::default());
+        }
         let lin = predictor::linear(&self.shapes, &c);
-        let mut x = predictor::predict(&self.constraints, &lin);
+        let mut x = predictor::predict(&self.constraints, start_from.unwrap_or(&lin));
+        if start_from.is_some() {
+            for &v in &self.constraints.fixed {
+                let v = v as usize;
+                x[3 * v..3 * v + 3].copy_from_slice(&lin[v]);
+            }
+        }
         let prob = Problem {
-            terms: &self.terms,
+            terms: &terms,
             params: &params,
             system: &self.system,
             options: &self.options,

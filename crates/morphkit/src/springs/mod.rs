@@ -67,7 +67,7 @@ pub use constraints::{stretched_vertices, Constraints, FixedVertices, Gauge};
 pub use metrics::{blend_metrics, fold_metrics, linear_blend, BlendMetrics, FoldMetrics};
 pub use options::{BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, RigSummary};
 pub use spring_set::{Spring, SpringKind, SpringOptions, SpringSet, StiffnessRule};
-pub use terms::HingeOptions;
+pub use terms::{HingeOptions, PointTarget};
 pub use weights::Weights;
 
 /// Why a blend could not be computed.
@@ -110,6 +110,20 @@ pub enum BlendError {
         sum: f64,
         /// Their smallest entry.
         min: f64,
+    },
+    /// A point target names a vertex that does not exist.
+    #[error("point target on vertex {vertex}, but the mesh has {num_vertices} vertices")]
+    TargetOutOfRange {
+        /// The bad id.
+        vertex: u32,
+        /// Vertex count.
+        num_vertices: usize,
+    },
+    /// A point target lies on a component that only the rigid gauge holds.
+    #[error("point target on vertex {vertex}, whose component has no fixed vertices: fix at least 3 non-collinear vertices of it so that it has a place in the world to be pulled against")]
+    TargetOnFreeComponent {
+        /// The vertex.
+        vertex: u32,
     },
     /// A fixed vertex id is out of range.
     #[error("fixed vertex {vertex} is out of range (the mesh has {num_vertices} vertices)")]

@@ -33,7 +33,7 @@ pub(crate) struct Workspace {
 
 /// One equilibrium problem: terms with this frame's parameters.
 pub(crate) struct Problem<'a> {
-    pub terms: &'a [Box<dyn EnergyTerm>],
+    pub terms: &'a [&'a dyn EnergyTerm],
     pub params: &'a [TermParameters],
     pub system: &'a FreeSystem,
     pub options: &'a BlendOptions,

@@ -14,9 +14,12 @@
 //! (and, by symmetry, $B^\top$ at `(j, i)`).
 
 mod hinge;
+mod points;
 mod spring;
 
 pub use hinge::{HingeOptions, HingeTerm};
+pub use points::PointTarget;
+pub(crate) use points::PointTerm;
 pub use spring::SpringTerm;
 
 /// A 3×3 block, row-major.
@@ -191,13 +194,13 @@ fn add_block(dst: &mut Block, b: &Block, transpose: bool) {
 }
 
 /// Total energy of `terms`.
-pub fn total_energy(terms: &[Box<dyn EnergyTerm>], params: &[TermParameters], x: &[f64]) -> f64 {
+pub fn total_energy(terms: &[&dyn EnergyTerm], params: &[TermParameters], x: &[f64]) -> f64 {
     terms.iter().zip(params).map(|(t, p)| t.energy(p, x)).sum()
 }
 
 /// Writes the total gradient into `g` and returns the total energy.
 pub fn total_gradient(
-    terms: &[Box<dyn EnergyTerm>],
+    terms: &[&dyn EnergyTerm],
     params: &[TermParameters],
     x: &[f64],
     g: &mut [f64],
