@@ -2,7 +2,7 @@
 //! memory check and the symbolic analysis), then canonical solves, one weight vector at a time
 //! or many in parallel.
 
-use super::constraints::{stretched_vertices, Constraints};
+use super::constraints::{stretched_vertices, Components, Constraints};
 use super::newton::{projected_newton, trust_region, Problem, Workspace};
 use super::options::{BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary};
 use super::system::{expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem};
@@ -137,9 +137,6 @@ impl PhysicalBlend {
             });
         }
         check_degenerate(shapes, &springs)?;
-        let kinematic = stretched_vertices(shapes, o.kinematic_stretch);
-        let constraints = Constraints::new(shapes, &topology, &o.fixed, &kinematic)?;
-
         // μ of the hinges from the base's structure springs (weight-independent).
         let (mut ksum, mut lsum, mut count) = (0.0, 0.0, 0usize);
         for (q, s) in springs.springs().iter().enumerate() {
@@ -170,9 +167,6 @@ impl PhysicalBlend {
             vertices: n,
             springs: springs.len(),
             hinges: hinges.len(),
-            fixed_vertices: constraints.fixed.len() - constraints.kinematic.len(),
-            kinematic_vertices: constraints.kinematic.len(),
-            gauged_components: constraints.gauges.len(),
             ..Default::default()
         };
         let mut terms: Vec<Box<dyn EnergyTerm>> =
@@ -195,7 +189,12 @@ impl PhysicalBlend {
             )));
         }
         let block_pattern = Arc::new(BlockPattern::new(n, &pairs));
-        drop(pairs);
+        let components = Components::from_pairs(n, pairs);
+        let kinematic = stretched_vertices(shapes, o.kinematic_stretch);
+        let constraints = Constraints::new(shapes, &components, &o.fixed, &kinematic)?;
+        summary.fixed_vertices = constraints.fixed.len() - constraints.kinematic.len();
+        summary.kinematic_vertices = constraints.kinematic.len();
+        summary.gauged_components = constraints.gauges.len();
         let vertex_order = match o.ordering {
             FillOrdering::NestedDissection => Some(vertex_nested_dissection(&block_pattern)?),
             FillOrdering::Amd => None,

@@ -47,13 +47,15 @@ pub struct Constraints {
 }
 
 impl Constraints {
-    /// Resolves `spec` for `shapes` with connectivity `topology`. `kinematic` vertices (see
+    /// Resolves `spec` for `shapes` whose vertices are coupled into connected components as
+    /// `components` gives them (one label per vertex, `0..count`; see [`Components`]).
+    /// `kinematic` vertices (see
     /// [`stretched_vertices`]) are held like automatic ones: where they, with the other fixed
     /// vertices of their component, span a plane they follow the linear blend; otherwise that
     /// component keeps its gauge and they are solved for.
     pub fn new(
         shapes: &ShapeSet,
-        topology: &Topology,
+        components: &Components,
         spec: &FixedVertices,
         kinematic: &[u32],
     ) -> Result<Self, BlendError> {
@@ -91,8 +93,8 @@ impl Constraints {
                 is_kinematic[v as usize] = true;
             }
         }
-        let comp = topology.components();
-        let mut members: Vec<Vec<u32>> = vec![Vec::new(); topology.num_components()];
+        let comp = &components.label;
+        let mut members: Vec<Vec<u32>> = vec![Vec::new(); components.count];
         for v in 0..n {
             members[comp[v] as usize].push(v as u32);
         }
@@ -165,6 +167,56 @@ impl Constraints {
     /// Number of free degrees of freedom.
     pub fn num_free_dofs(&self) -> usize {
         self.fixed_dof.iter().filter(|f| !**f).count()
+    }
+}
+
+/// Connected components of the vertices under every coupling of the energy (mesh edges,
+/// 2-ring springs, hinges, internal springs…), not only the triangles: an interior vertex tied
+/// to the surface by springs belongs to the surface's component.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Components {
+    /// Label of each vertex, `0..count`, numbered in order of first vertex.
+    pub label: Vec<u32>,
+    /// Number of components (an uncoupled vertex is one).
+    pub count: usize,
+}
+
+impl Components {
+    /// Components of `n` vertices under the pairs `pairs`.
+    pub fn from_pairs(n: usize, pairs: impl IntoIterator<Item = [u32; 2]>) -> Self {
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn find(parent: &mut [u32], mut v: u32) -> u32 {
+            while parent[v as usize] != v {
+                parent[v as usize] = parent[parent[v as usize] as usize];
+                v = parent[v as usize];
+            }
+            v
+        }
+        for [a, b] in pairs {
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            if ra != rb {
+                parent[ra.max(rb) as usize] = ra.min(rb);
+            }
+        }
+        let mut label = vec![u32::MAX; n];
+        let mut count = 0usize;
+        for v in 0..n as u32 {
+            let r = find(&mut parent, v) as usize;
+            if label[r] == u32::MAX {
+                label[r] = count as u32;
+                count += 1;
+            }
+            label[v as usize] = label[r];
+        }
+        Self { label, count }
+    }
+
+    /// Components of a triangle mesh's topology.
+    pub fn of_topology(topology: &Topology) -> Self {
+        Self {
+            label: topology.components().to_vec(),
+            count: topology.num_components(),
+        }
     }
 }
 
@@ -379,11 +431,13 @@ mod tests {
             generate::rotate(&m.positions, [0.0; 3], [0.0, 0.0, 1.0], 1.0),
         );
         let t = Topology::new(m.num_vertices(), &m.triangles);
-        let c = Constraints::new(&s, &t, &FixedVertices::None, &[]).unwrap();
+        let c =
+            Constraints::new(&s, &Components::of_topology(&t), &FixedVertices::None, &[]).unwrap();
         assert_eq!(c.fixed_dof.iter().filter(|f| **f).count(), 6);
         assert_eq!(c.gauges.len(), 1);
         // Auto finds the two poles on the rotation axis: collinear, so ignored.
-        let c = Constraints::new(&s, &t, &FixedVertices::Auto, &[]).unwrap();
+        let c =
+            Constraints::new(&s, &Components::of_topology(&t), &FixedVertices::Auto, &[]).unwrap();
         assert_eq!(c.fixed_dof.iter().filter(|f| **f).count(), 6);
         assert!(c.fixed.is_empty());
     }
@@ -393,12 +447,25 @@ mod tests {
         let m = generate::tube(0.5, 4.0, 8, 8, false);
         let s = set_of(&m, generate::bend(&m.positions, 2.0, 2.0, 1.5));
         let t = Topology::new(m.num_vertices(), &m.triangles);
-        let c = Constraints::new(&s, &t, &FixedVertices::Auto, &[]).unwrap();
+        let c =
+            Constraints::new(&s, &Components::of_topology(&t), &FixedVertices::Auto, &[]).unwrap();
         assert_eq!(c.fixed.len(), 5 * 8, "rings at x ≤ 2 do not move");
         assert!(c.gauges.is_empty());
-        let e = Constraints::new(&s, &t, &FixedVertices::Ids(vec![0, 8]), &[]).unwrap_err();
+        let e = Constraints::new(
+            &s,
+            &Components::of_topology(&t),
+            &FixedVertices::Ids(vec![0, 8]),
+            &[],
+        )
+        .unwrap_err();
         assert!(matches!(e, BlendError::UnderConstrained { fixed: 2, .. }));
-        let e = Constraints::new(&s, &t, &FixedVertices::Ids(vec![0, 9999]), &[]).unwrap_err();
+        let e = Constraints::new(
+            &s,
+            &Components::of_topology(&t),
+            &FixedVertices::Ids(vec![0, 9999]),
+            &[],
+        )
+        .unwrap_err();
         assert!(matches!(
             e,
             BlendError::FixedOutOfRange { vertex: 9999, .. }

@@ -63,7 +63,7 @@ pub mod terms;
 pub mod weights;
 
 pub use blender::{blend, PhysicalBlend};
-pub use constraints::{stretched_vertices, Constraints, FixedVertices, Gauge};
+pub use constraints::{stretched_vertices, Components, Constraints, FixedVertices, Gauge};
 pub use metrics::{blend_metrics, fold_metrics, linear_blend, BlendMetrics, FoldMetrics};
 pub use options::{BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, RigSummary};
 pub use spring_set::{Spring, SpringKind, SpringOptions, SpringSet, StiffnessRule};
