@@ -88,7 +88,7 @@ pub struct BlendArgs {
     pub hinge_weight: f64,
     /// Triangles stretched more than this factor between the base and a target follow the
     /// linear blend (kinematic); `inf` turns this off.
-    #[arg(long, default_value_t = 15.0)]
+    #[arg(long, default_value_t = 10.0)]
     pub kinematic_stretch: f64,
     /// Refresh the Newton preconditioner every N iterations (0: only when it stalls). A speed
     /// knob; results agree within the tolerance.

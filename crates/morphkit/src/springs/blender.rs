@@ -5,12 +5,15 @@
 use super::constraints::{stretched_vertices, Components, Constraints};
 use super::newton::{projected_newton, trust_region, Problem, Workspace};
 use super::options::{BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary};
+use super::rotation_predictor::RotationPredictor;
 use super::system::{expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem};
 use super::terms::{
     BlockHessian, BlockPattern, EnergyTerm, HingeTerm, PointTarget, PointTerm, SpringTerm,
     TermParameters,
 };
-use super::{predictor, BlendError, FillOrdering, SpringKind, SpringSet, StiffnessRule, Weights};
+use super::{
+    predictor, BlendError, FillOrdering, Predictor, SpringKind, SpringSet, StiffnessRule, Weights,
+};
 use crate::mesh::{validate, ShapeSet, Topology};
 use crate::sparse::Ordering;
 use std::sync::Arc;
@@ -34,6 +37,10 @@ struct Rig {
     tolerance: f64,
     /// Mean structure-spring stiffness on the base (the unit of point-target stiffness).
     mean_stiffness: f64,
+    /// The rotation-aware predictor, when asked for and possible.
+    rotation: Option<RotationPredictor>,
+    /// Per vertex: held by a boundary condition.
+    is_fixed: Vec<bool>,
     summary: RigSummary,
 }
 
@@ -208,6 +215,14 @@ impl PhysicalBlend {
             });
         }
         let system = FreeSystem::new(block_pattern.clone(), &constraints.fixed_dof)?;
+        let rotation = match o.predictor {
+            Predictor::RotationAware => RotationPredictor::new(shapes, &components),
+            Predictor::Linear => None,
+        };
+        let mut is_fixed = vec![false; n];
+        for &v in &constraints.fixed {
+            is_fixed[v as usize] = true;
+        }
         let ordering = match &vertex_order {
             Some(order) => Ordering::Custom(expand_vertex_order(order, &system.dof_index)),
             None => Ordering::Amd,
@@ -231,6 +246,8 @@ impl PhysicalBlend {
                 options: o.clone(),
                 tolerance,
                 mean_stiffness: ksum / count,
+                rotation,
+                is_fixed,
                 summary,
             },
             ws,
@@ -402,7 +419,14 @@ impl Rig {
             params.push(TermParameters::default());
         }
         let lin = predictor::linear(&self.shapes, &c);
-        let mut x = predictor::predict(&self.constraints, start_from.unwrap_or(&lin));
+        let predicted = match (start_from, &self.rotation) {
+            (None, Some(r)) => r.predict(&c, &lin, &self.is_fixed),
+            _ => None,
+        };
+        let mut x = predictor::predict(
+            &self.constraints,
+            start_from.or(predicted.as_deref()).unwrap_or(&lin),
+        );
         if start_from.is_some() {
             for &v in &self.constraints.fixed {
                 let v = v as usize;

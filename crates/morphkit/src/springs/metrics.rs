@@ -127,7 +127,7 @@ pub struct FoldMetrics {
     /// Largest distance of a vertex from its linear blend.
     pub max_from_linear: f64,
     /// Largest distance any vertex moves between two of the shapes in the blend (the base
-    /// and every shape with a non-zero coefficient).
+    /// and every shape with a non-zero coefficient; all shapes at an endpoint).
     pub largest_move: f64,
 }
 
@@ -187,6 +187,10 @@ pub fn fold_metrics(
     let mut involved = active.clone();
     if !involved.contains(&0) {
         involved.insert(0, 0);
+    }
+    if involved.len() < 2 {
+        // One shape alone (an endpoint): measure against every shape of the set.
+        involved = (0..shapes.len()).collect();
     }
     for (k, &s) in involved.iter().enumerate() {
         for &t in &involved[k + 1..] {

@@ -22,8 +22,11 @@
 //!
 //! > $x^*(w)$ = the minimiser reached by the deterministic trust-region Newton iteration of
 //! > [`newton`](self) (fixed budgets, schedules and tolerances, no timing) started from the
-//! > predictor $P(w)$ = the linear blend $\sum_s c_s x^s$ (rigidly re-framed for gauged
-//! > components), then each gauged component aligned rigidly to the linear blend.
+//! > predictor $P(w)$: Poisson interpolation of the shapes' deformation gradients with
+//! > rotations blended in the log map ([`Predictor::RotationAware`], Xu et al. 2005), placed
+//! > rigidly on the fixed vertices or the linear blend $\sum_s c_s x^s$
+//! > ([`Predictor::Linear`] uses that blend directly), then each gauged component aligned
+//! > rigidly to the linear blend.
 //!
 //! Consequences, each tested:
 //! - **Endpoints are exact.** At one-hot weights $P = x^s$, where every term has zero energy and
@@ -33,7 +36,7 @@
 //!   order, scrubbing back and forth, threads ([`PhysicalBlend::solve_many`]) and machine load
 //!   change no bit of the result. `--alpha a` equals the matching frame of `--frames`.
 //! - **Kinematic sheets.** Triangles stretched more than [`BlendOptions::kinematic_stretch`]
-//!   (default 15×) between the base and a target are no material: their vertices follow the
+//!   (default 10×) between the base and a target are no material: their vertices follow the
 //!   linear blend as boundary conditions, chosen once per rig.
 //! - **Failures are loud.** A solve that does not reach the tolerance returns
 //!   `converged = false` with the vertices whose residual force is above it.
@@ -56,6 +59,7 @@ pub mod metrics;
 mod newton;
 mod options;
 mod predictor;
+mod rotation_predictor;
 mod spring_set;
 mod steihaug;
 mod system;
@@ -65,7 +69,9 @@ pub mod weights;
 pub use blender::{blend, PhysicalBlend};
 pub use constraints::{stretched_vertices, Components, Constraints, FixedVertices, Gauge};
 pub use metrics::{blend_metrics, fold_metrics, linear_blend, BlendMetrics, FoldMetrics};
-pub use options::{BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, RigSummary};
+pub use options::{
+    BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, Predictor, RigSummary,
+};
 pub use spring_set::{Spring, SpringKind, SpringOptions, SpringSet, StiffnessRule};
 pub use terms::{HingeOptions, PointTarget};
 pub use weights::Weights;

@@ -132,10 +132,14 @@ pub(crate) fn trust_region(
     let mut exact_current = false;
     let mut radius = f64::NAN;
     let mut extend = 1usize;
+    // Accepted steps since the last factorization (a rejected step leaves x, hence the
+    // Hessian, unchanged: no refactorization then).
+    let mut accepted_since = 0usize;
     while !stats.converged && stats.newton_iterations < prob.options.max_newton_iterations {
         stats.newton_iterations += 1;
         let every = prob.options.refactor_every;
-        if refactor || (every > 0 && (stats.newton_iterations - 1) % every == 0) {
+        if refactor || (every > 0 && accepted_since >= every) {
+            accepted_since = 0;
             prob.hessian(ws, x, HessianKind::Projected, false);
             prob.factorize(ws, stats)?;
             refactor = false;
@@ -184,11 +188,11 @@ pub(crate) fn trust_region(
         }
         x_trial.copy_from_slice(x);
         sys.add_step(&mut x_trial, 1.0, &step.step);
-        let e_trial = prob.gradient(&x_trial, &mut g_trial);
-        let g_trial_max = sys.max_free(&g_trial);
+        let mut e_trial = prob.gradient(&x_trial, &mut g_trial);
+        let mut g_trial_max = sys.max_free(&g_trial);
         let roundoff = ROUNDOFF * e.abs().max(f64::MIN_POSITIVE);
         let actual = e - e_trial;
-        let rho = if !e_trial.is_finite() {
+        let mut rho = if !e_trial.is_finite() {
             f64::NEG_INFINITY
         } else if actual.abs() <= roundoff || step.decrease <= roundoff {
             // Near the minimum energy differences drown in round-off: a step that reduces the
@@ -201,9 +205,33 @@ pub(crate) fn trust_region(
         } else {
             actual / step.decrease.max(f64::MIN_POSITIVE)
         };
+        let mut m_norm = step.m_norm;
+        if rho <= 1e-4 && actual.abs() > roundoff {
+            // Backtrack along the step instead of solving the subproblem again (Nocedal & Yuan
+            // 1998): x, the factorization and the model stay valid, only energies are needed.
+            let gp = dot(&gfree, &step.step).min(0.0);
+            let php = 2.0 * (-step.decrease - gp);
+            let mut t = 1.0;
+            for _ in 0..4 {
+                t *= 0.5;
+                stats.rejected_steps += 1;
+                x_trial.copy_from_slice(x);
+                sys.add_step(&mut x_trial, t, &step.step);
+                let e_t = prob.gradient(&x_trial, &mut g_trial);
+                let predicted = -(t * gp + 0.5 * t * t * php);
+                if e_t.is_finite() && predicted > 0.0 && (e - e_t) >= 0.1 * predicted {
+                    rho = (e - e_t) / predicted;
+                    e_trial = e_t;
+                    g_trial_max = sys.max_free(&g_trial);
+                    m_norm = t * step.m_norm;
+                    radius = m_norm;
+                    break;
+                }
+            }
+        }
         if rho < 0.25 {
-            radius = 0.25 * step.m_norm.min(radius);
-        } else if rho > 0.75 && step.termination == Termination::Boundary {
+            radius = 0.25 * m_norm.min(radius);
+        } else if rho > 0.75 && step.termination == Termination::Boundary && m_norm >= radius {
             radius *= 2.0;
         }
         if rho > 1e-4 {
@@ -212,6 +240,7 @@ pub(crate) fn trust_region(
             std::mem::swap(x, &mut x_trial);
             std::mem::swap(&mut g, &mut g_trial);
             exact_current = false;
+            accepted_since += 1;
         } else {
             stats.rejected_steps += 1;
             if radius.is_nan() || radius <= 1e-300 {

@@ -30,13 +30,16 @@ pub struct BlendOptions {
     /// deformation) between the base and any target are *kinematic*: no material stretches
     /// that far, so their vertices follow the linear blend as boundary conditions instead of
     /// being solved for (an opening mouth's inner lips and mouth interior, a slit that opens).
-    /// `f64::INFINITY` turns this off. Default `15`: above the largest stretch in any horse
-    /// pose of the test data (11×), where solving them as springs gives the better shape,
-    /// and below the 30–300× of an opening mouth.
+    /// `f64::INFINITY` turns this off. Default `10`: the tenfold stretch of an opening mouth's
+    /// inner strip (ICT jawOpen stretches its mouth interior up to 30× and its lips 116×);
+    /// the horse poses stretch at most 3 triangles past it (11×), and compress up to 30×,
+    /// which never counts.
     pub kinematic_stretch: f64,
     /// Armijo sufficient-decrease constant of the [`LinearSolver::Direct`] line search.
     /// Default `1e-4`.
     pub armijo: f64,
+    /// Where each solve starts. Default [`Predictor::RotationAware`].
+    pub predictor: Predictor,
     /// How Newton systems are solved. Default [`LinearSolver::TrustRegion`].
     pub linear_solver: LinearSolver,
     /// Fill-reducing ordering of the Hessian. Default [`FillOrdering::NestedDissection`].
@@ -51,6 +54,19 @@ pub struct BlendOptions {
     /// Largest predicted memory of one solver, in bytes; a larger problem is refused before
     /// anything big is allocated, with the estimate in the error. Default 8 GiB.
     pub max_memory_bytes: u64,
+}
+
+/// Where every solve starts (the predictor P(w) of the canonical equilibrium).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Predictor {
+    /// The linear blend of the shapes.
+    Linear,
+    /// Poisson interpolation of the shapes' deformation gradients, rotations blended in the
+    /// log map (Xu et al. 2005): parts that turn are predicted turned, not cut along the
+    /// chord. Falls back to the linear blend where the base cannot carry a Poisson solve.
+    /// The default.
+    #[default]
+    RotationAware,
 }
 
 /// Fill-reducing ordering for the Hessian's Cholesky factor.
@@ -85,8 +101,9 @@ impl Default for BlendOptions {
             gradient_tolerance: 1e-6,
             max_newton_iterations: 300,
             min_rest_fraction: 0.05,
-            kinematic_stretch: 15.0,
+            kinematic_stretch: 10.0,
             armijo: 1e-4,
+            predictor: Predictor::RotationAware,
             linear_solver: LinearSolver::TrustRegion,
             ordering: FillOrdering::NestedDissection,
             cg_iterations: 40,
