@@ -16,6 +16,7 @@
 //! sampler on the node's `weights` path (what Blender and three.js play). Every accessor has its
 //! own buffer view, 4-byte aligned, with the proper `target` for vertex data and indices.
 
+mod buffers;
 mod read;
 mod write;
 
