@@ -9,7 +9,9 @@
 //! - `--weights-file F`: one weight vector per frame, JSON (`{"frames": [[…], …]}` or a bare
 //!   array of arrays) or CSV (one row per frame; `#` comments and a non-numeric header skipped).
 
-use crate::util::{progress, write_report};
+use crate::outputs::{is_frame_dir, Kind, Plan};
+use crate::util::{check_fps, check_positive, progress, read_json};
+use crate::weights::{self, Origin};
 use anyhow::{bail, Context};
 use morphkit::io::{self, FramesOptions};
 use morphkit::mesh::{ShapeSet, Topology};
@@ -86,49 +88,9 @@ pub struct BlendArgs {
     /// Write per-frame solver statistics, timings and quality metrics as JSON.
     #[arg(long)]
     pub report: Option<PathBuf>,
-}
-
-/// Reads per-frame weight vectors from JSON or CSV.
-pub fn read_weights_file(path: &Path) -> anyhow::Result<Vec<Vec<f64>>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read the weights file", path.display()))?;
-    let is_json = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
-        || text.trim_start().starts_with(['[', '{']);
-    let rows: Vec<Vec<f64>> = if is_json {
-        let v: serde_json::Value = serde_json::from_str(&text)
-            .with_context(|| format!("{}: invalid JSON", path.display()))?;
-        let arr = v.get("frames").or_else(|| v.get("weights")).unwrap_or(&v);
-        serde_json::from_value(arr.clone()).with_context(|| {
-            format!(
-                "{}: expected an array of weight arrays (or {{\"frames\": [[…], …]}})",
-                path.display()
-            )
-        })?
-    } else {
-        let mut rows = Vec::new();
-        for (n, line) in text.lines().enumerate() {
-            let line = line.trim();
-            if line.is_empty() || line.starts_with('#') {
-                continue;
-            }
-            let parsed: Result<Vec<f64>, _> = line
-                .split([',', ';', '\t'])
-                .map(|s| s.trim().parse::<f64>())
-                .collect();
-            match parsed {
-                Ok(r) => rows.push(r),
-                Err(_) if rows.is_empty() && n == 0 => continue, // header
-                Err(e) => bail!("{}: line {}: {e} in '{line}'", path.display(), n + 1),
-            }
-        }
-        rows
-    };
-    if rows.is_empty() {
-        bail!("{}: no weight rows", path.display());
-    }
-    Ok(rows)
+    /// Replace the frame_*.obj files of an existing output directory.
+    #[arg(long)]
+    pub force: bool,
 }
 
 fn read_fixed(spec: &str) -> anyhow::Result<FixedVertices> {
@@ -136,11 +98,7 @@ fn read_fixed(spec: &str) -> anyhow::Result<FixedVertices> {
         "auto" => FixedVertices::Auto,
         "none" => FixedVertices::None,
         file => {
-            let text = std::fs::read_to_string(file).with_context(|| {
-                format!("{file}: cannot read the fixed-vertex file (or use auto / none)")
-            })?;
-            let v: serde_json::Value =
-                serde_json::from_str(&text).with_context(|| format!("{file}: invalid JSON"))?;
+            let v = read_json(Path::new(file), "fixed-vertex file (or use auto / none)")?;
             let ids = v.get("fixed").unwrap_or(&v);
             let ids: Vec<u32> = serde_json::from_value(ids.clone())
                 .with_context(|| format!("{file}: expected {{\"fixed\": [vertex ids]}} or an array of non-negative integers"))?;
@@ -159,10 +117,14 @@ fn frame_weights(a: &BlendArgs, n_shapes: usize) -> anyhow::Result<Vec<Weights>>
         }
     };
     if let Some(alpha) = a.alpha {
-        return Ok(vec![Weights::Alpha(alpha)]);
+        let w = Weights::Alpha(alpha);
+        weights::check(&w, n_shapes, Origin::Flag("--alpha"))?;
+        return Ok(vec![w]);
     }
     if let Some(w) = &a.weights {
-        return Ok(vec![wrap(w.clone())]);
+        let w = wrap(w.clone());
+        weights::check(&w, n_shapes, Origin::Flag("--weights"))?;
+        return Ok(vec![w]);
     }
     if let Some(n) = a.frames {
         if n_shapes != 2 {
@@ -176,7 +138,19 @@ fn frame_weights(a: &BlendArgs, n_shapes: usize) -> anyhow::Result<Vec<Weights>>
             .collect());
     }
     if let Some(f) = &a.weights_file {
-        return Ok(read_weights_file(f)?.into_iter().map(wrap).collect());
+        let rows = io::read_weights(f)?;
+        let mut out = Vec::with_capacity(rows.len());
+        for (frame, row) in rows.iter().enumerate() {
+            let w = wrap(row.values.clone());
+            let origin = Origin::File {
+                path: f,
+                row,
+                frame,
+            };
+            weights::check(&w, n_shapes, origin)?;
+            out.push(w);
+        }
+        return Ok(out);
     }
     bail!("give one of --alpha, --weights, --frames or --weights-file")
 }
@@ -194,17 +168,27 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let mut inputs = vec![a.base.clone()];
     inputs.extend(a.targets.iter().cloned());
-    io::check_not_input(&a.out, &inputs)?;
-    if let Some(r) = &a.report {
-        io::check_not_input(r, &inputs)?;
+    let mut protected = inputs.clone();
+    protected.extend(a.weights_file.iter().cloned());
+    if !matches!(a.fixed.as_str(), "auto" | "none") {
+        protected.push(PathBuf::from(&a.fixed));
     }
+    check_positive("--k0", a.k0)?;
+    check_positive("--tolerance", a.tolerance)?;
+    check_fps(a.fps)?;
+    let mut outputs = Plan::new(&protected)
+        .force(a.force)
+        .output("--out", &a.out, Kind::MeshOrAnimation)
+        .output_opt("--report", a.report.as_ref(), Kind::Json)
+        .check()?;
     let shapes = io::read_shape_set(&inputs)?;
     let weights = frame_weights(a, shapes.len())?;
     for (k, w) in weights.iter().enumerate() {
         w.coefficients(shapes.len())
             .with_context(|| format!("frame {k}: invalid weights"))?;
     }
-    let single_mesh = io::Format::from_path(&a.out).is_some_and(|f| f.is_single_mesh());
+    let single_mesh =
+        !is_frame_dir(&a.out) && io::Format::from_path(&a.out).is_some_and(|f| f.is_single_mesh());
     if single_mesh && weights.len() != 1 {
         bail!("{}: a single-mesh output holds one frame, but {} frames were asked for; use a directory, .glb or .pc2", a.out.display(), weights.len());
     }
@@ -234,6 +218,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let mut frames = Vec::with_capacity(weights.len());
     let mut rows = Vec::with_capacity(weights.len());
     let mut unconverged = Vec::new();
+    let mut clamped = Vec::new();
     for (k, w) in weights.iter().enumerate() {
         let linear = linear_blend(&shapes, w)?;
         let mut row = json!({ "frame": k, "weights": weights_json(w) });
@@ -246,6 +231,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
                 let r = s.solve(w).with_context(|| format!("frame {k}"))?;
                 if !r.stats.converged {
                     unconverged.push(k);
+                }
+                if r.stats.clamped_springs > 0 {
+                    clamped.push((k, r.stats.clamped_springs));
                 }
                 if a.report.is_some() {
                     row["physical"] = json!(blend_metrics(&shapes, &topology, w, &r.positions)?);
@@ -267,23 +255,28 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
             "warning: {} of {} frames did not reach the gradient tolerance {} (frames {:?}); see --report for their gradient norms",
             unconverged.len(),
             weights.len(),
-            a.tolerance,
+            crate::util::num(a.tolerance),
             &unconverged[..unconverged.len().min(10)]
+        );
+    }
+    if let Some(&(_, most)) = clamped.iter().max_by_key(|c| c.1) {
+        eprintln!(
+            "warning: extreme weights clamped the rest lengths of up to {most} springs in {} of {} frames (first: frame {}); see --report",
+            clamped.len(),
+            weights.len(),
+            clamped[0].0
         );
     }
     let out_set = ShapeSet::new(shapes.base().clone(), frames)?;
     let t_write = Instant::now();
     if single_mesh {
-        io::write_mesh(&a.out, &out_set.mesh(0))?;
+        outputs.mesh(&a.out, &out_set.mesh(0))?;
     } else {
-        io::write_frames(
-            &a.out,
-            &out_set,
-            &FramesOptions {
-                fps: a.fps,
-                inputs: inputs.clone(),
-            },
-        )?;
+        let opts = FramesOptions {
+            fps: a.fps,
+            inputs: inputs.clone(),
+        };
+        outputs.frames(&a.out, &out_set, &opts, |_| {})?;
     }
     let write_seconds = t_write.elapsed().as_secs_f64();
     if let Some(r) = &a.report {
@@ -300,8 +293,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
             "timings": { "setup_seconds": setup_seconds, "write_seconds": write_seconds, "total_seconds": start.elapsed().as_secs_f64() },
             "frames": rows,
         });
-        write_report(r, &report)?;
+        outputs.json(r, &report)?;
     }
+    outputs.commit()?;
     eprintln!("wrote {} frame(s) to {}", weights.len(), a.out.display());
     Ok(())
 }

@@ -41,7 +41,7 @@ pub use sequence::{
     write_frames, write_frames_with, FramesOptions,
 };
 pub use source::{strip_bom, strip_bom_str};
-pub use staging::{frame_files, Staging};
+pub use staging::{frame_files, is_frame_file_name, Staging};
 pub use weights::{parse_weights, read_weights, WeightRow};
 
 use crate::mesh::{validate, TriMesh, ValidationReport};

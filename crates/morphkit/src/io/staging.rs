@@ -32,7 +32,7 @@ pub struct Staging {
 }
 
 /// True for the names frame directories hold: `frame_*.obj`.
-pub(crate) fn is_frame_name(name: &str) -> bool {
+pub fn is_frame_file_name(name: &str) -> bool {
     name.starts_with("frame_") && name.ends_with(".obj")
 }
 
@@ -43,7 +43,7 @@ pub fn frame_files(dir: &Path) -> Vec<PathBuf> {
     };
     let mut v: Vec<PathBuf> = listed
         .filter_map(|e| e.ok())
-        .filter(|e| is_frame_name(&e.file_name().to_string_lossy()) && e.path().is_file())
+        .filter(|e| is_frame_file_name(&e.file_name().to_string_lossy()) && e.path().is_file())
         .map(|e| e.path())
         .collect();
     v.sort();
