@@ -3,7 +3,7 @@
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A progress bar on stderr, hidden when stderr is not a terminal.
 pub fn progress(len: u64, message: &str) -> ProgressBar {
@@ -22,6 +22,44 @@ pub fn progress(len: u64, message: &str) -> ProgressBar {
     );
     pb.set_message(message.to_string());
     pb
+}
+
+/// Inputs at least this large (bytes, all files together) are announced before reading.
+pub const LARGE_INPUT_BYTES: u64 = 64 << 20;
+
+/// Meshes with at least this many vertices are announced before long work on them.
+pub const LARGE_MESH_VERTICES: usize = 250_000;
+
+/// Prints `reading N files (X MiB)…` on stderr before reading inputs that are large, so a
+/// long read is never silent (the progress bars show only on a terminal).
+pub fn announce_reading(paths: &[PathBuf]) {
+    if let Some(m) = reading_message(paths, LARGE_INPUT_BYTES) {
+        eprintln!("{m}");
+    }
+}
+
+/// The message of [`announce_reading`] when `paths` hold at least `threshold` bytes.
+pub fn reading_message(paths: &[PathBuf], threshold: u64) -> Option<String> {
+    let bytes: u64 = paths
+        .iter()
+        .filter_map(|p| std::fs::metadata(p).ok())
+        .map(|m| m.len())
+        .sum();
+    (bytes >= threshold).then(|| {
+        format!(
+            "reading {} file{} ({:.1} MiB)…",
+            paths.len(),
+            if paths.len() == 1 { "" } else { "s" },
+            bytes as f64 / (1 << 20) as f64
+        )
+    })
+}
+
+/// Prints `WHAT (V vertices)…` on stderr before long work on a large mesh.
+pub fn announce_work(what: &str, vertices: usize) {
+    if vertices >= LARGE_MESH_VERTICES {
+        eprintln!("{what} ({vertices} vertices)…");
+    }
 }
 
 /// A number for messages: plain for ordinary magnitudes, scientific (`1e-300`) otherwise, so
@@ -100,6 +138,21 @@ mod tests {
         assert_eq!(e, "--omega inf: not finite; give a finite number");
         let e = check_positive("--k0", -1e-300).unwrap_err().to_string();
         assert_eq!(e, "--k0 -1e-300: must be greater than 0");
+        let e = check_fps(1e-300).unwrap_err().to_string();
+        assert!(e.starts_with("--fps 1e-300"), "{e}");
+    }
+
+    #[test]
+    fn large_inputs_are_announced() {
+        let p = std::env::temp_dir().join(format!("morphkit-announce-{}", std::process::id()));
+        std::fs::write(&p, vec![b'x'; 3 << 19]).unwrap();
+        let paths = [p.clone(), p.clone()];
+        assert_eq!(
+            reading_message(&paths, 1 << 20).as_deref(),
+            Some("reading 2 files (3.0 MiB)…")
+        );
+        assert_eq!(reading_message(&paths, 4 << 20), None);
+        let _ = std::fs::remove_file(&p);
         let e = check_fps(1e-300).unwrap_err().to_string();
         assert!(e.starts_with("--fps 1e-300: must be at least 0.001"), "{e}");
     }

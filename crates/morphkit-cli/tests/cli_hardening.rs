@@ -99,6 +99,7 @@ fn outputs_of_one_command_must_be_distinct_and_not_inputs() {
         "{e}"
     );
     assert!(!x.exists() && !w.exists() && !cw.exists());
+    let _ = std::fs::remove_dir_all(&d);
 }
 
 #[test]
@@ -147,6 +148,7 @@ fn output_locations_are_checked_before_any_work() {
         s(&d.join("t.ply")),
     ]);
     assert!(e.contains("--out") && e.contains("holds one mesh"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
 }
 
 #[test]
@@ -177,6 +179,7 @@ fn converting_an_animation_to_one_mesh_needs_a_frame() {
     );
     let e = fails(&["convert", s(&glb), "--frame", "36", s(&d.join("two.ply"))]);
     assert!(e.contains("--frame 36") && e.contains("0 to 35"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
 }
 
 #[test]
@@ -194,6 +197,7 @@ fn existing_frames_in_an_output_directory_need_force() {
     let n = names(&out);
     assert_eq!(n.len(), 37, "{n:?}");
     assert!(n.contains(&"notes.txt".to_string()));
+    let _ = std::fs::remove_dir_all(&d);
 }
 
 #[test]
@@ -240,6 +244,7 @@ fn weight_errors_say_what_was_expected_and_found() {
         assert!(!e.contains("invalid weights"), "{e}");
     }
     assert!(!out.exists());
+    let _ = std::fs::remove_dir_all(&d);
 }
 
 #[test]
@@ -321,4 +326,5 @@ fn non_finite_flags_are_named() {
     );
     let e = transfer(&["--markers", s(&m), "--fixed-vertex=-1"]);
     assert!(e.contains("--fixed-vertex -1"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
 }

@@ -181,6 +181,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         .output("--out", &a.out, Kind::MeshOrAnimation)
         .output_opt("--report", a.report.as_ref(), Kind::Json)
         .check()?;
+    crate::util::announce_reading(&inputs);
     let shapes = io::read_shape_set(&inputs)?;
     let weights = frame_weights(a, shapes.len())?;
     for (k, w) in weights.iter().enumerate() {
@@ -203,6 +204,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         gradient_tolerance: a.tolerance,
         ..Default::default()
     };
+    if !a.linear {
+        crate::util::announce_work("setting up the physical blend", shapes.num_vertices());
+    }
     let t_setup = Instant::now();
     let mut solver = if a.linear {
         None

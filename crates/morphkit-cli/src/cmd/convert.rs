@@ -151,6 +151,7 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
     } = expand(ins)?;
     protected.extend(args.reference.iter().cloned());
     check_fps(args.fps)?;
+    crate::util::announce_reading(&inputs);
     let frames_out = is_frames_output(&out);
     let out_fmt = Format::from_path(&out);
     let out_gltf = matches!(out_fmt, Some(Format::Glb | Format::Gltf));

@@ -139,9 +139,11 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
         .output_opt("--warped-target", args.warped_target.as_ref(), Kind::Mesh)
         .output_opt("--report", args.report.as_ref(), Kind::Json)
         .check()?;
+    crate::util::announce_reading(&inputs);
     let source = io::read_mesh(&args.source)?;
     let target = io::read_mesh(&args.target)?;
     let markers = Markers::read(&args.markers)?;
+    crate::util::announce_work("computing the correspondence", target.num_vertices());
     let t0 = Instant::now();
     let r = correspond(&source, &target, &markers, &opts).with_context(|| {
         format!(

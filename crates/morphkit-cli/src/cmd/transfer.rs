@@ -142,6 +142,7 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         .output_opt("--report", args.report.as_ref(), Kind::Json)
         .check()?;
 
+    crate::util::announce_reading(&inputs);
     let source_ref = io::read_mesh(&args.source_ref)?;
     let target = io::read_mesh(&args.target)?;
     let mut frames = read_frames(&frame_paths, &args.source_ref)?;
@@ -176,6 +177,7 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
     let corr = match (&args.markers, &args.correspondence) {
         (Some(m), _) => {
             let markers = Markers::read(m)?;
+            crate::util::announce_work("computing the correspondence", target.num_vertices());
             let t0 = Instant::now();
             let r = correspond(
                 &source_ref,
@@ -200,6 +202,7 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         (None, None) => bail!("give --markers or --correspondence"),
     };
 
+    crate::util::announce_work("factorizing the transfer system", target.num_vertices());
     let t0 = Instant::now();
     let tr = AnimationTransfer::new(&source_ref, &target, &corr, &opts)?;
     let factor_s = t0.elapsed().as_secs_f64();
