@@ -20,7 +20,7 @@ mod buffers;
 mod read;
 mod write;
 
-pub use read::read_gltf_morphs;
+pub use read::{parse_gltf_morphs, read_gltf_morphs};
 pub use write::write_gltf_morphs;
 
 use crate::mesh::{Point, TriMesh};

@@ -82,7 +82,13 @@ fn check_glb(path: &Path, b: &[u8]) -> Result<(), IoError> {
 /// accessor has another count than the base `POSITION`, and weight outputs whose count does
 /// not match keys × targets.
 pub fn read_gltf_morphs(path: &Path) -> Result<GltfMorphs, IoError> {
-    let bytes = read_file(path)?;
+    parse_gltf_morphs(path, read_file(path)?)
+}
+
+/// Like [`read_gltf_morphs`], on the file's bytes (GLB or glTF JSON). `path` names the file in
+/// errors, says whether it should be GLB (by extension), and is the base of relative buffer
+/// URIs.
+pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoError> {
     let is_glb = bytes.starts_with(b"glTF");
     if is_glb {
         check_glb(path, &bytes)?;
