@@ -223,3 +223,15 @@ fn an_external_buffer_is_read_up_to_its_byte_length_only() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Found by `cargo fuzz` (target `gltf`): a GLB header declaring a length below 12 bytes made
+/// the `gltf` crate subtract with overflow.
+#[test]
+fn a_glb_length_below_its_header_is_an_error() {
+    let d = tmp_dir("glb-len");
+    let glb = d.join("x.glb");
+    std::fs::write(&glb, b"glTF\x02\0\0\0\0\0\0\0\x16\x20\x20{\"b    ").unwrap();
+    let e = err(&glb);
+    assert!(e.contains("less than the header itself"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}

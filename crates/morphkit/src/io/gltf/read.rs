@@ -35,6 +35,15 @@ fn check_glb(path: &Path, b: &[u8]) -> Result<(), IoError> {
         ));
     }
     let length = u32_at(b, 8) as usize;
+    if length < 12 {
+        return Err(IoError::binary(
+            path,
+            8,
+            format!(
+                "the GLB header declares a length of {length} bytes, less than the header itself"
+            ),
+        ));
+    }
     if length > b.len() {
         return Err(IoError::binary(
             path,
