@@ -235,3 +235,22 @@ fn a_glb_length_below_its_header_is_an_error() {
     assert!(e.contains("less than the header itself"), "{e}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Found by `cargo fuzz` (target `gltf`): a POSITION attribute naming a missing accessor made
+/// the `gltf-json` crate index out of bounds.
+#[test]
+fn a_position_accessor_that_does_not_exist_is_an_error() {
+    let d = tmp_dir("gltf-pos");
+    let g = d.join("x.gltf");
+    std::fs::write(
+        &g,
+        r#"{"asset": {"version": "2.0"}, "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}]}"#,
+    )
+    .unwrap();
+    let e = err(&g);
+    assert!(
+        e.contains("mesh 0, primitive 0: POSITION names accessor 0, but the file has 0 accessors"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -17,6 +17,7 @@
 //! own buffer view, 4-byte aligned, with the proper `target` for vertex data and indices.
 
 mod buffers;
+mod precheck;
 mod read;
 mod write;
 

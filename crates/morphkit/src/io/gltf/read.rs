@@ -122,6 +122,7 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
         path: path.to_path_buf(),
         cause: source,
     };
+    super::precheck::check_positions(path, super::super::strip_bom(&bytes))?;
     let mut gltf = if is_glb {
         ::gltf::Gltf::from_slice(&bytes)
     } else {
