@@ -1,7 +1,9 @@
 //! `morphkit`: physical blendshapes and animation transfer from the command line.
 
 mod cmd;
+mod outputs;
 mod util;
+mod weights;
 
 use clap::{Parser, Subcommand};
 

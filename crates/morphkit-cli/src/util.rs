@@ -1,8 +1,9 @@
-//! Helpers shared by the subcommands: progress bars and JSON reports.
+//! Helpers shared by the subcommands: progress bars, JSON reports, flag checks and numbers in
+//! messages.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A progress bar on stderr, hidden when stderr is not a terminal.
 pub fn progress(len: u64, message: &str) -> ProgressBar {
@@ -23,9 +24,136 @@ pub fn progress(len: u64, message: &str) -> ProgressBar {
     pb
 }
 
-/// Writes a JSON report atomically (temporary file, then rename).
-pub fn write_report(path: &Path, value: &serde_json::Value) -> anyhow::Result<()> {
-    let text = serde_json::to_string_pretty(value)?;
-    morphkit::io::write_atomic(path, text.as_bytes()).map_err(|e| anyhow::anyhow!("{e}"))?;
-    Ok(())
+/// Inputs at least this large (bytes, all files together) are announced before reading.
+pub const LARGE_INPUT_BYTES: u64 = 64 << 20;
+
+/// Meshes with at least this many vertices are announced before long work on them.
+pub const LARGE_MESH_VERTICES: usize = 250_000;
+
+/// Prints `reading N files (X MiB)…` on stderr before reading inputs that are large, so a
+/// long read is never silent (the progress bars show only on a terminal).
+pub fn announce_reading(paths: &[PathBuf]) {
+    if let Some(m) = reading_message(paths, LARGE_INPUT_BYTES) {
+        eprintln!("{m}");
+    }
+}
+
+/// The message of [`announce_reading`] when `paths` hold at least `threshold` bytes.
+pub fn reading_message(paths: &[PathBuf], threshold: u64) -> Option<String> {
+    let bytes: u64 = paths
+        .iter()
+        .filter_map(|p| std::fs::metadata(p).ok())
+        .map(|m| m.len())
+        .sum();
+    (bytes >= threshold).then(|| {
+        format!(
+            "reading {} file{} ({:.1} MiB)…",
+            paths.len(),
+            if paths.len() == 1 { "" } else { "s" },
+            bytes as f64 / (1 << 20) as f64
+        )
+    })
+}
+
+/// Prints `WHAT (V vertices)…` on stderr before long work on a large mesh.
+pub fn announce_work(what: &str, vertices: usize) {
+    if vertices >= LARGE_MESH_VERTICES {
+        eprintln!("{what} ({vertices} vertices)…");
+    }
+}
+
+/// A number for messages: plain for ordinary magnitudes, scientific (`1e-300`) otherwise, so
+/// a message never spells out hundreds of digits.
+pub fn num(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// `value` of the flag `flag` when it is finite and within `[min, max]` (`min` excluded when
+/// `open_min`); the error names the flag and says which condition fails.
+pub fn check_range(
+    flag: &str,
+    value: f64,
+    min: f64,
+    open_min: bool,
+    max: f64,
+) -> anyhow::Result<f64> {
+    if !value.is_finite() {
+        anyhow::bail!("{flag} {}: not finite; give a finite number", num(value));
+    }
+    let low = if open_min { value <= min } else { value < min };
+    if low || value > max {
+        let lo = if open_min { "greater than" } else { "at least" };
+        if max.is_finite() {
+            anyhow::bail!(
+                "{flag} {}: must be {lo} {} and at most {}",
+                num(value),
+                num(min),
+                num(max)
+            );
+        }
+        anyhow::bail!("{flag} {}: must be {lo} {}", num(value), num(min));
+    }
+    Ok(value)
+}
+
+/// `value` of `flag` when it is finite and positive.
+pub fn check_positive(flag: &str, value: f64) -> anyhow::Result<f64> {
+    check_range(flag, value, 0.0, true, f64::INFINITY)
+}
+
+/// Frame rates accepted by `--fps`: key times `frame / fps` stay representable as glTF's `f32`.
+pub const FPS_RANGE: (f64, f64) = (1e-3, 1e5);
+
+/// Checks `--fps`.
+pub fn check_fps(fps: f64) -> anyhow::Result<f64> {
+    check_range("--fps", fps, FPS_RANGE.0, false, FPS_RANGE.1)
+}
+
+/// Reads a JSON file as text, without a UTF-8 byte-order mark; errors name the file.
+pub fn read_json(path: &Path, what: &str) -> anyhow::Result<serde_json::Value> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| anyhow::anyhow!("{}: cannot read the {what}: {e}", path.display()))?;
+    serde_json::from_str(morphkit::io::strip_bom_str(&text))
+        .map_err(|e| anyhow::anyhow!("{}: invalid JSON: {e}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_compact_and_flags_named() {
+        assert_eq!(num(1e-300), "1e-300");
+        assert_eq!(num(0.5), "0.5");
+        assert_eq!(num(1e300), "1e300");
+        assert_eq!(num(f64::INFINITY), "inf");
+        let e = check_positive("--omega", f64::INFINITY)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "--omega inf: not finite; give a finite number");
+        let e = check_positive("--k0", -1e-300).unwrap_err().to_string();
+        assert_eq!(e, "--k0 -1e-300: must be greater than 0");
+        let e = check_fps(1e-300).unwrap_err().to_string();
+        assert!(e.starts_with("--fps 1e-300"), "{e}");
+    }
+
+    #[test]
+    fn large_inputs_are_announced() {
+        let p = std::env::temp_dir().join(format!("morphkit-announce-{}", std::process::id()));
+        std::fs::write(&p, vec![b'x'; 3 << 19]).unwrap();
+        let paths = [p.clone(), p.clone()];
+        assert_eq!(
+            reading_message(&paths, 1 << 20).as_deref(),
+            Some("reading 2 files (3.0 MiB)…")
+        );
+        assert_eq!(reading_message(&paths, 4 << 20), None);
+        let _ = std::fs::remove_file(&p);
+        let e = check_fps(1e-300).unwrap_err().to_string();
+        assert!(e.starts_with("--fps 1e-300: must be at least 0.001"), "{e}");
+    }
 }

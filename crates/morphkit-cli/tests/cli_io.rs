@@ -203,7 +203,14 @@ fn convert_into_a_frame_directory_drops_stale_frames() {
     let out = d.join("out");
     ok(&["convert", s(&d.join("seq")), s(&out)]);
     assert!(out.join("frame_0003.obj").exists());
-    ok(&["convert", s(&f[0]), s(&f[1]), s(&out)]);
+    // Replacing (and deleting) earlier frames needs --force, and the refusal names them.
+    let e = fails(&["convert", s(&f[0]), s(&f[1]), s(&out)]);
+    assert!(
+        e.contains("frame_0000.obj … frame_0003.obj") && e.contains("--force"),
+        "{e}"
+    );
+    assert!(out.join("frame_0003.obj").exists());
+    ok(&["convert", s(&f[0]), s(&f[1]), "--force", s(&out)]);
     let mut names: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

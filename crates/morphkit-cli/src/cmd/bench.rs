@@ -5,6 +5,7 @@
 //! real meshes: the horse (8.4k vertices, reference ↔ pose 5) and the armadillo (14.6k, bent
 //! procedurally: it has no poses).
 
+use crate::outputs::{Kind, Plan};
 use morphkit::mesh::{generate, ShapeSet};
 use morphkit::springs::{BlendOptions, PhysicalBlend, Weights};
 use serde_json::json;
@@ -33,6 +34,9 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 1)]
     threads: usize,
 }
+
+/// Most `--steps`: 36 steps of every mesh take about a minute.
+const MAX_STEPS: usize = 1000;
 
 fn peak_rss_mib() -> Option<f64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -218,6 +222,22 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         .data
         .clone()
         .or_else(|| std::env::var_os("MORPHKIT_DATA").map(PathBuf::from));
+    if !(1..=MAX_STEPS).contains(&args.steps) {
+        anyhow::bail!(
+            "--steps {}: must be between 1 and {MAX_STEPS} (each step is one solve per mesh)",
+            args.steps
+        );
+    }
+    if !matches!(args.suite.as_str(), "springs" | "transfer" | "memory" | "all") {
+        anyhow::bail!(
+            "unknown suite '{}': use springs, transfer, memory or all",
+            args.suite
+        );
+    }
+    // Check the report location before measuring, so a bad path loses no measurements.
+    let mut outputs = Plan::new(&[])
+        .output_opt("--report", args.report.as_ref(), Kind::Json)
+        .check()?;
     let mut report = json!({ "threads": args.threads });
     if matches!(args.suite.as_str(), "springs" | "all") {
         report["springs"] = json!(springs_suite(data.as_deref(), args.steps, args.threads)?);
@@ -231,17 +251,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             None => println!("transfer suite skipped: it needs --data DIR or MORPHKIT_DATA (elephant, horse, camel)"),
         }
     }
-    if !matches!(
-        args.suite.as_str(),
-        "springs" | "transfer" | "memory" | "all"
-    ) {
-        anyhow::bail!(
-            "unknown suite '{}': use springs, transfer, memory or all",
-            args.suite
-        );
-    }
     if let Some(path) = &args.report {
-        crate::util::write_report(path, &report)?;
+        outputs.json(path, &report)?;
     }
+    outputs.commit()?;
     Ok(())
 }

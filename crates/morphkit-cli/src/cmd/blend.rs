@@ -9,7 +9,9 @@
 //! - `--weights-file F`: one weight vector per frame, JSON (`{"frames": [[…], …]}` or a bare
 //!   array of arrays) or CSV (one row per frame; `#` comments and a non-numeric header skipped).
 
-use crate::util::{progress, write_report};
+use crate::outputs::{is_frame_dir, Kind, Plan};
+use crate::util::{check_fps, check_positive, progress, read_json};
+use crate::weights::{self, Origin};
 use anyhow::{bail, Context};
 use morphkit::io::{self, FramesOptions};
 use morphkit::mesh::{ShapeSet, Topology};
@@ -110,49 +112,9 @@ pub struct BlendArgs {
     /// Write per-frame solver statistics, timings and quality metrics as JSON.
     #[arg(long)]
     pub report: Option<PathBuf>,
-}
-
-/// Reads per-frame weight vectors from JSON or CSV.
-pub fn read_weights_file(path: &Path) -> anyhow::Result<Vec<Vec<f64>>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read the weights file", path.display()))?;
-    let is_json = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
-        || text.trim_start().starts_with(['[', '{']);
-    let rows: Vec<Vec<f64>> = if is_json {
-        let v: serde_json::Value = serde_json::from_str(&text)
-            .with_context(|| format!("{}: invalid JSON", path.display()))?;
-        let arr = v.get("frames").or_else(|| v.get("weights")).unwrap_or(&v);
-        serde_json::from_value(arr.clone()).with_context(|| {
-            format!(
-                "{}: expected an array of weight arrays (or {{\"frames\": [[…], …]}})",
-                path.display()
-            )
-        })?
-    } else {
-        let mut rows = Vec::new();
-        for (n, line) in text.lines().enumerate() {
-            let line = line.trim();
-            if line.is_empty() || line.starts_with('#') {
-                continue;
-            }
-            let parsed: Result<Vec<f64>, _> = line
-                .split([',', ';', '\t'])
-                .map(|s| s.trim().parse::<f64>())
-                .collect();
-            match parsed {
-                Ok(r) => rows.push(r),
-                Err(_) if rows.is_empty() && n == 0 => continue, // header
-                Err(e) => bail!("{}: line {}: {e} in '{line}'", path.display(), n + 1),
-            }
-        }
-        rows
-    };
-    if rows.is_empty() {
-        bail!("{}: no weight rows", path.display());
-    }
-    Ok(rows)
+    /// Replace the frame_*.obj files of an existing output directory.
+    #[arg(long)]
+    pub force: bool,
 }
 
 fn read_fixed(spec: &str) -> anyhow::Result<FixedVertices> {
@@ -160,11 +122,7 @@ fn read_fixed(spec: &str) -> anyhow::Result<FixedVertices> {
         "auto" => FixedVertices::Auto,
         "none" => FixedVertices::None,
         file => {
-            let text = std::fs::read_to_string(file).with_context(|| {
-                format!("{file}: cannot read the fixed-vertex file (or use auto / none)")
-            })?;
-            let v: serde_json::Value =
-                serde_json::from_str(&text).with_context(|| format!("{file}: invalid JSON"))?;
+            let v = read_json(Path::new(file), "fixed-vertex file (or use auto / none)")?;
             let ids = v.get("fixed").unwrap_or(&v);
             let ids: Vec<u32> = serde_json::from_value(ids.clone())
                 .with_context(|| format!("{file}: expected {{\"fixed\": [vertex ids]}} or an array of non-negative integers"))?;
@@ -183,10 +141,14 @@ fn frame_weights(a: &BlendArgs, n_shapes: usize) -> anyhow::Result<Vec<Weights>>
         }
     };
     if let Some(alpha) = a.alpha {
-        return Ok(vec![Weights::Alpha(alpha)]);
+        let w = Weights::Alpha(alpha);
+        weights::check(&w, n_shapes, Origin::Flag("--alpha"))?;
+        return Ok(vec![w]);
     }
     if let Some(w) = &a.weights {
-        return Ok(vec![wrap(w.clone())]);
+        let w = wrap(w.clone());
+        weights::check(&w, n_shapes, Origin::Flag("--weights"))?;
+        return Ok(vec![w]);
     }
     if let Some(n) = a.frames {
         if n_shapes != 2 {
@@ -200,7 +162,19 @@ fn frame_weights(a: &BlendArgs, n_shapes: usize) -> anyhow::Result<Vec<Weights>>
             .collect());
     }
     if let Some(f) = &a.weights_file {
-        return Ok(read_weights_file(f)?.into_iter().map(wrap).collect());
+        let rows = io::read_weights(f)?;
+        let mut out = Vec::with_capacity(rows.len());
+        for (frame, row) in rows.iter().enumerate() {
+            let w = wrap(row.values.clone());
+            let origin = Origin::File {
+                path: f,
+                row,
+                frame,
+            };
+            weights::check(&w, n_shapes, origin)?;
+            out.push(w);
+        }
+        return Ok(out);
     }
     bail!("give one of --alpha, --weights, --frames or --weights-file")
 }
@@ -251,18 +225,29 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let mut inputs = vec![a.base.clone()];
     inputs.extend(a.targets.iter().cloned());
-    io::check_not_input(&a.out, &inputs)?;
-    if let Some(r) = &a.report {
-        io::check_not_input(r, &inputs)?;
+    let mut protected = inputs.clone();
+    protected.extend(a.weights_file.iter().cloned());
+    if !matches!(a.fixed.as_str(), "auto" | "none") {
+        protected.push(PathBuf::from(&a.fixed));
     }
-    io::check_not_input(&unconverged_path(&a.out), &inputs)?;
+    check_positive("--k0", a.k0)?;
+    check_positive("--tolerance", a.tolerance)?;
+    check_fps(a.fps)?;
+    let mut outputs = Plan::new(&protected)
+        .force(a.force)
+        .output("--out", &a.out, Kind::MeshOrAnimation)
+        .output_opt("--report", a.report.as_ref(), Kind::Json)
+        .output("OUT-unconverged.ply", &unconverged_path(&a.out), Kind::Mesh)
+        .check()?;
+    crate::util::announce_reading(&inputs);
     let shapes = io::read_shape_set(&inputs)?;
     let weights = frame_weights(a, shapes.len())?;
     for (k, w) in weights.iter().enumerate() {
         w.coefficients(shapes.len())
             .with_context(|| format!("frame {k}: invalid weights"))?;
     }
-    let single_mesh = io::Format::from_path(&a.out).is_some_and(|f| f.is_single_mesh());
+    let single_mesh =
+        !is_frame_dir(&a.out) && io::Format::from_path(&a.out).is_some_and(|f| f.is_single_mesh());
     if single_mesh && weights.len() != 1 {
         bail!("{}: a single-mesh output holds one frame, but {} frames were asked for; use a directory, .glb or .pc2", a.out.display(), weights.len());
     }
@@ -291,6 +276,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
         .clamp(1, 64);
+    if !a.linear {
+        crate::util::announce_work("setting up the physical blend", shapes.num_vertices());
+    }
     let t_setup = Instant::now();
     let mut solver = if a.linear {
         None
@@ -309,7 +297,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let mut rows = Vec::with_capacity(weights.len());
     let mut unconverged = Vec::new();
     let mut failed = vec![false; shapes.num_vertices()];
-    let mut clamped = 0;
+    let mut clamped = Vec::new();
     for (k, (w, r)) in weights.iter().zip(results).enumerate() {
         let linear = linear_blend(&shapes, w)?;
         let mut row = json!({ "frame": k, "weights": weights_json(w) });
@@ -325,7 +313,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
                         failed[v as usize] = true;
                     }
                 }
-                clamped = clamped.max(r.stats.clamped_springs);
+                if r.stats.clamped_springs > 0 {
+                    clamped.push((k, r.stats.clamped_springs));
+                }
                 if a.report.is_some() {
                     row["physical"] = json!(blend_metrics(&shapes, &topology, w, &r.positions)?);
                     row["folds"] = json!(fold_metrics(&shapes, &topology, w, &r.positions)?);
@@ -339,9 +329,6 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         }
         frames.push((format!("frame_{k:04}"), positions));
         rows.push(row);
-    }
-    if clamped > 0 {
-        eprintln!("warning: extreme weights clamped the rest lengths of up to {clamped} springs in a frame (see --report)");
     }
     let failed_ply = (!unconverged.is_empty()).then(|| unconverged_path(&a.out));
     if let Some(path) = &failed_ply {
@@ -358,21 +345,26 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
             .iter()
             .map(|&f| if f { [220, 30, 30] } else { [200, 200, 200] })
             .collect();
-        io::write_ply_colored(path, shapes.base(), &io::Colors::PerVertex(colors))?;
+        outputs.colored_ply(path, shapes.base(), &io::Colors::PerVertex(colors))?;
+    }
+    if let Some(&(_, most)) = clamped.iter().max_by_key(|c| c.1) {
+        eprintln!(
+            "warning: extreme weights clamped the rest lengths of up to {most} springs in {} of {} frames (first: frame {}); see --report",
+            clamped.len(),
+            weights.len(),
+            clamped[0].0
+        );
     }
     let out_set = ShapeSet::new(shapes.base().clone(), frames)?;
     let t_write = Instant::now();
     if single_mesh {
-        io::write_mesh(&a.out, &out_set.mesh(0))?;
+        outputs.mesh(&a.out, &out_set.mesh(0))?;
     } else {
-        io::write_frames(
-            &a.out,
-            &out_set,
-            &FramesOptions {
-                fps: a.fps,
-                inputs: inputs.clone(),
-            },
-        )?;
+        let opts = FramesOptions {
+            fps: a.fps,
+            inputs: inputs.clone(),
+        };
+        outputs.frames(&a.out, &out_set, &opts, |_| {})?;
     }
     let write_seconds = t_write.elapsed().as_secs_f64();
     if let Some(r) = &a.report {
@@ -393,8 +385,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
             "timings": { "setup_seconds": setup_seconds, "write_seconds": write_seconds, "total_seconds": start.elapsed().as_secs_f64() },
             "frames": rows,
         });
-        write_report(r, &report)?;
+        outputs.json(r, &report)?;
     }
+    outputs.commit()?;
     eprintln!("wrote {} frame(s) to {}", weights.len(), a.out.display());
     Ok(())
 }

@@ -1,10 +1,11 @@
 //! `morphkit convert`: between OBJ, PLY, OFF, glTF/GLB and PC2, single meshes or frame
 //! sequences.
 
-use crate::util::progress;
+use crate::outputs::{Kind, Outputs, Plan};
+use crate::util::{check_fps, progress};
 use anyhow::{bail, Context};
 use morphkit::io::{self, Format, FramesOptions};
-use morphkit::ShapeSet;
+use morphkit::{ShapeSet, TriMesh};
 use std::path::{Path, PathBuf};
 
 const EXAMPLES: &str = "\
@@ -16,9 +17,12 @@ Examples:
   morphkit convert cat-run.glb frames/                     # an animation back to frames/frame_0000.obj, …
   morphkit convert anim.pc2 --reference rest.obj frames/   # PC2 needs the mesh for its connectivity
   morphkit convert face-rig.glb face-copy.gltf             # a morph-target rig keeps its targets and names
+  morphkit convert cat-run.glb --frame 12 pose12.obj       # one frame of an animation
 
-An output without extension (or an existing directory) receives numbered OBJ frames.
-Outputs are written atomically and never overwrite an input.";
+An output without extension (or an existing directory) receives numbered OBJ frames; an
+existing directory that already holds frame_*.obj files needs --force. A single-mesh output
+(.obj, .ply, .off) of an animation needs --frame N. Outputs are written atomically and never
+overwrite an input.";
 
 /// Arguments of `morphkit convert`.
 #[derive(clap::Args, Debug)]
@@ -33,6 +37,12 @@ pub struct ConvertArgs {
     /// Reference mesh giving the connectivity of a PC2 input.
     #[arg(long, value_name = "MESH")]
     pub reference: Option<PathBuf>,
+    /// Write only this frame (0-based) of an animation input to a single-mesh output.
+    #[arg(long, value_name = "N")]
+    pub frame: Option<usize>,
+    /// Replace the frame_*.obj files of an existing output directory.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Input arguments after expansion (see [`expand`]).
@@ -95,16 +105,34 @@ fn read_sequence(files: &[PathBuf]) -> anyhow::Result<ShapeSet> {
     Ok(set?)
 }
 
-fn write_frames(out: &Path, frames: &ShapeSet, opts: &FramesOptions) -> anyhow::Result<()> {
+fn write_frames(
+    mut outputs: Outputs,
+    out: &Path,
+    frames: &ShapeSet,
+    opts: &FramesOptions,
+) -> anyhow::Result<()> {
     let pb = progress(frames.len() as u64, "writing");
-    let r = io::write_frames_with(out, frames, opts, |_| pb.inc(1));
+    let r = outputs.frames(out, frames, opts, |_| pb.inc(1));
     pb.finish_and_clear();
     r?;
+    outputs.commit()?;
     eprintln!(
         "wrote {}: {} frames of {} vertices",
         out.display(),
         frames.len(),
         frames.num_vertices()
+    );
+    Ok(())
+}
+
+fn write_mesh(mut outputs: Outputs, out: &Path, mesh: &TriMesh) -> anyhow::Result<()> {
+    outputs.mesh(out, mesh)?;
+    outputs.commit()?;
+    eprintln!(
+        "wrote {}: {} vertices, {} triangles",
+        out.display(),
+        mesh.num_vertices(),
+        mesh.num_triangles()
     );
     Ok(())
 }
@@ -122,66 +150,106 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         single_dir,
     } = expand(ins)?;
     protected.extend(args.reference.iter().cloned());
-    io::check_not_input(&out, &protected)?;
+    check_fps(args.fps)?;
+    crate::util::announce_reading(&inputs);
+    let frames_out = is_frames_output(&out);
+    let out_fmt = Format::from_path(&out);
+    let out_gltf = matches!(out_fmt, Some(Format::Glb | Format::Gltf));
+    let sequence = inputs.len() > 1 || single_dir;
+    if sequence && !frames_out && !out_gltf && args.frame.is_none() {
+        bail!(
+            "{}: a sequence converts to an animation: give a directory, .glb, .gltf or .pc2 output, or --frame N for one frame",
+            out.display()
+        );
+    }
+    if frames_out && args.frame.is_some() {
+        bail!(
+            "--frame picks one frame for a single-mesh output; {} receives a whole animation",
+            out.display()
+        );
+    }
+    let kind = if frames_out {
+        Kind::Animation
+    } else {
+        Kind::Mesh
+    };
+    let outputs = Plan::new(&protected)
+        .force(args.force)
+        .output("OUT", &out, kind)
+        .check()?;
     let opts = FramesOptions {
         fps: args.fps,
         inputs: protected,
     };
-    let frames_out = is_frames_output(&out);
-    if inputs.len() > 1 || single_dir {
-        if !frames_out && !matches!(Format::from_path(&out), Some(Format::Glb | Format::Gltf)) {
-            bail!(
-                "{}: a sequence converts to an animation: give a directory, .glb, .gltf or .pc2 output",
-                out.display()
-            );
-        }
+    if sequence {
         let frames = read_sequence(&inputs)?;
-        return write_frames(&out, &frames, &opts);
+        return match args.frame {
+            Some(k) => write_mesh(outputs, &out, &pick(&frames, k, ins.join(" "))?),
+            None => write_frames(outputs, &out, &frames, &opts),
+        };
     }
     let input = &inputs[0];
     let in_fmt = Format::from_path(input);
-    let out_fmt = Format::from_path(&out);
-    match (in_fmt, frames_out) {
-        (Some(Format::Pc2), false) if !matches!(out_fmt, Some(Format::Glb | Format::Gltf)) => {
-            bail!(
-                "{}: a PC2 animation converts to a directory, .glb, .gltf or .pc2",
-                out.display()
-            )
-        }
-        (Some(Format::Glb | Format::Gltf), false)
-            if matches!(out_fmt, Some(Format::Glb | Format::Gltf)) =>
-        {
-            let rig = io::read_gltf_morphs(input)?;
-            morphkit::mesh::validate(&rig.base)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", input.display()))?;
-            io::write_gltf_morphs(&out, &rig)?;
-            eprintln!(
-                "wrote {}: {} vertices, {} morph targets, {} animation keys",
-                out.display(),
-                rig.base.num_vertices(),
-                rig.targets.len(),
-                rig.weight_keys.len()
-            );
-            Ok(())
-        }
-        (Some(Format::Pc2), _) | (Some(Format::Glb | Format::Gltf), true) => {
-            let frames = io::read_animation(input, args.reference.as_deref())?;
-            write_frames(&out, &frames, &opts)
-        }
-        (_, true) => {
-            let frames = io::read_animation(input, None)?;
-            write_frames(&out, &frames, &opts)
-        }
-        (_, false) => {
-            let mesh = io::read_mesh(input)?;
-            io::write_mesh(&out, &mesh)?;
-            eprintln!(
-                "wrote {}: {} vertices, {} triangles",
-                out.display(),
-                mesh.num_vertices(),
-                mesh.num_triangles()
-            );
-            Ok(())
-        }
+    let in_anim = matches!(in_fmt, Some(Format::Pc2 | Format::Glb | Format::Gltf));
+    if frames_out {
+        let frames = io::read_animation(input, args.reference.as_deref())?;
+        return write_frames(outputs, &out, &frames, &opts);
     }
+    if in_anim && out_gltf && args.frame.is_none() && in_fmt != Some(Format::Pc2) {
+        let rig = io::read_gltf_morphs(input)?;
+        morphkit::mesh::validate(&rig.base)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", input.display()))?;
+        let mut outputs = outputs;
+        outputs.gltf(&out, &rig)?;
+        outputs.commit()?;
+        eprintln!(
+            "wrote {}: {} vertices, {} morph targets, {} animation keys",
+            out.display(),
+            rig.base.num_vertices(),
+            rig.targets.len(),
+            rig.weight_keys.len()
+        );
+        return Ok(());
+    }
+    if in_anim && out_gltf && args.frame.is_none() {
+        let frames = io::read_animation(input, args.reference.as_deref())?;
+        return write_frames(outputs, &out, &frames, &opts);
+    }
+    if in_anim || args.frame.is_some() {
+        let frames = io::read_animation(input, args.reference.as_deref())?;
+        let k = match args.frame {
+            Some(k) => k,
+            None if frames.len() == 1 => 0,
+            None => bail!(
+                "{}: holds {} frames ({} … {}), but {} holds one mesh; give --frame N (0 to {}) \
+                 for one of them, or a directory, .glb, .gltf or .pc2 output for all",
+                input.display(),
+                frames.len(),
+                frames.name(0),
+                frames.name(frames.len() - 1),
+                out.display(),
+                frames.len() - 1
+            ),
+        };
+        return write_mesh(
+            outputs,
+            &out,
+            &pick(&frames, k, input.display().to_string())?,
+        );
+    }
+    let mesh = io::read_mesh(input)?;
+    write_mesh(outputs, &out, &mesh)
+}
+
+/// Frame `k` of `frames` as a mesh; the error names `what` and the valid range.
+fn pick(frames: &ShapeSet, k: usize, what: String) -> anyhow::Result<TriMesh> {
+    if k >= frames.len() {
+        bail!(
+            "--frame {k}: {what} has {} frame{} (0 to {})",
+            frames.len(),
+            if frames.len() == 1 { "" } else { "s" },
+            frames.len() - 1
+        );
+    }
+    Ok(frames.mesh(k))
 }

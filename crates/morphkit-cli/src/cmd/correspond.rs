@@ -1,6 +1,8 @@
 //! `morphkit correspond`: a triangle correspondence between two meshes from marker pairs
 //! (Wang & Lee 2008, Sec. 3.1.2–3.1.3), saved once as JSON for `transfer` and synthesis.
 
+use crate::outputs::{Kind, Plan};
+use crate::util::{check_positive, check_range};
 use anyhow::Context;
 use morphkit::io;
 use morphkit::transfer::{correspond, CorrespondenceOptions, CorrespondenceResult, Markers};
@@ -56,14 +58,8 @@ pub struct CorrespondArgs {
 
 /// Options from the command line.
 fn options(args: &CorrespondArgs) -> anyhow::Result<CorrespondenceOptions> {
-    anyhow::ensure!(
-        args.omega.is_finite() && args.omega > 0.0,
-        "--omega must be positive"
-    );
-    anyhow::ensure!(
-        args.radius.is_finite() && args.radius >= 0.0,
-        "--radius must be non-negative"
-    );
+    check_positive("--omega", args.omega)?;
+    check_range("--radius", args.radius, 0.0, false, f64::INFINITY)?;
     anyhow::ensure!(args.max_matches >= 1, "--max-matches must be at least 1");
     let mut o = CorrespondenceOptions::default();
     o.lsmesh.omega = args.omega;
@@ -137,19 +133,17 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
         args.target.clone(),
         args.markers.clone(),
     ];
-    for out in [
-        Some(&args.out),
-        args.warped_source.as_ref(),
-        args.warped_target.as_ref(),
-    ]
-    .into_iter()
-    .flatten()
-    {
-        io::check_not_input(out, &inputs)?;
-    }
+    let mut outputs = Plan::new(&inputs)
+        .output("--out", &args.out, Kind::Json)
+        .output_opt("--warped-source", args.warped_source.as_ref(), Kind::Mesh)
+        .output_opt("--warped-target", args.warped_target.as_ref(), Kind::Mesh)
+        .output_opt("--report", args.report.as_ref(), Kind::Json)
+        .check()?;
+    crate::util::announce_reading(&inputs);
     let source = io::read_mesh(&args.source)?;
     let target = io::read_mesh(&args.target)?;
     let markers = Markers::read(&args.markers)?;
+    crate::util::announce_work("computing the correspondence", target.num_vertices());
     let t0 = Instant::now();
     let r = correspond(&source, &target, &markers, &opts).with_context(|| {
         format!(
@@ -160,23 +154,30 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
     })?;
     let secs = t0.elapsed().as_secs_f64();
     print_summary(&r, secs);
-    io::write_atomic(&args.out, r.correspondence.to_json().as_bytes())
-        .with_context(|| format!("{}: cannot write", args.out.display()))?;
-    eprintln!("wrote {}", args.out.display());
+    outputs.text(&args.out, &r.correspondence.to_json())?;
     if let Some(p) = &args.warped_source {
-        io::write_mesh(p, &source.with_positions(r.warped_source.clone()))?;
-        eprintln!("wrote {}", p.display());
+        outputs.mesh(p, &source.with_positions(r.warped_source.clone()))?;
     }
     if let Some(p) = &args.warped_target {
-        io::write_mesh(p, &target.with_positions(r.warped_target.clone()))?;
-        eprintln!("wrote {}", p.display());
+        outputs.mesh(p, &target.with_positions(r.warped_target.clone()))?;
     }
     if let Some(p) = &args.report {
         let mut v = summary(&r, secs);
         v["source"] = json!(args.source);
         v["target"] = json!(args.target);
         v["correspondence"] = json!(args.out);
-        crate::util::write_report(p, &v)?;
+        outputs.json(p, &v)?;
+    }
+    outputs.commit()?;
+    for p in [
+        Some(&args.out),
+        args.warped_source.as_ref(),
+        args.warped_target.as_ref(),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        eprintln!("wrote {}", p.display());
     }
     Ok(())
 }

@@ -57,6 +57,7 @@ fn yes_no(v: &Value) -> &'static str {
 
 /// Runs `morphkit info`.
 pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
+    crate::util::announce_reading(&args.files);
     let pb = progress(args.files.len() as u64, "reading");
     let mut reports = Vec::with_capacity(args.files.len());
     let mut first: Option<TriMesh> = None;

@@ -2,7 +2,8 @@
 //! (Wang & Lee 2008, Sec. 3.2.3; Sumner & Popović 2004).
 
 use super::correspond::{print_summary, summary};
-use crate::util::progress;
+use crate::outputs::{Kind, Plan};
+use crate::util::{check_fps, check_positive, progress};
 use anyhow::{bail, Context};
 use morphkit::io::{self, Format, FramesOptions};
 use morphkit::transfer::{
@@ -43,12 +44,7 @@ pub struct TransferArgs {
     #[arg(long, value_name = "MESH")]
     pub target: PathBuf,
     /// Marker pairs (computes the correspondence first).
-    #[arg(
-        long,
-        value_name = "JSON",
-        conflicts_with = "correspondence",
-        required_unless_present = "correspondence"
-    )]
+    #[arg(long, value_name = "JSON", conflicts_with = "correspondence")]
     pub markers: Option<PathBuf>,
     /// A correspondence written by `morphkit correspond`.
     #[arg(long, value_name = "JSON")]
@@ -60,8 +56,8 @@ pub struct TransferArgs {
     #[arg(long, value_name = "JSON")]
     pub report: Option<PathBuf>,
     /// Keep constraint vertices fixed (the paper's convention); optionally name the vertex.
-    #[arg(long, value_name = "VERTEX", num_args = 0..=1, default_missing_value = "-1")]
-    pub fixed_vertex: Option<i64>,
+    #[arg(long, value_name = "VERTEX", num_args = 0..=1, allow_negative_numbers = true)]
+    pub fixed_vertex: Option<Option<i64>>,
     /// How gradients of several matched source triangles combine: mean or nearest.
     #[arg(long, default_value = "mean", value_parser = ["mean", "nearest"])]
     pub combine: String,
@@ -75,6 +71,9 @@ pub struct TransferArgs {
     /// Frames per second of a .glb/.gltf output.
     #[arg(long, default_value_t = 24.0)]
     pub fps: f64,
+    /// Replace the frame_*.obj files of an existing output directory.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Reads the source frames in any of the accepted forms.
@@ -99,10 +98,15 @@ fn options(args: &TransferArgs) -> anyhow::Result<TransferOptions> {
     let mut o = TransferOptions::default();
     if let Some(v) = args.fixed_vertex {
         o.translation = TranslationMode::FixedVertex;
-        if v >= 0 {
-            o.solver.constraint_vertices = vec![u32::try_from(v).context("--fixed-vertex")?];
-        } else if v != -1 {
-            bail!("--fixed-vertex {v}: vertex indices are 0-based and non-negative");
+        if let Some(v) = v {
+            let id = u32::try_from(v).map_err(|_| {
+                anyhow::anyhow!(
+                    "--fixed-vertex {v}: expected a 0-based vertex index (0 to {}), or the flag \
+                     alone for the default constraint vertex",
+                    u32::MAX
+                )
+            })?;
+            o.solver.constraint_vertices = vec![id];
         }
     }
     o.combine = match args.combine.as_str() {
@@ -112,10 +116,14 @@ fn options(args: &TransferArgs) -> anyhow::Result<TransferOptions> {
     if args.area_weighted {
         o.solver.weighting = TriangleWeighting::Area;
     }
-    anyhow::ensure!(
-        args.source_scale.is_finite() && args.source_scale > 0.0,
-        "--source-scale must be positive"
-    );
+    check_positive("--source-scale", args.source_scale)?;
+    check_fps(args.fps)?;
+    if args.markers.is_none() && args.correspondence.is_none() {
+        bail!(
+            "give --markers JSON (marker pairs; the correspondence is computed first) or \
+             --correspondence JSON (a file written by morphkit correspond)"
+        );
+    }
     Ok(o)
 }
 
@@ -128,11 +136,13 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
     inputs.extend([args.source_ref.clone(), args.target.clone()]);
     inputs.extend(args.markers.iter().cloned());
     inputs.extend(args.correspondence.iter().cloned());
-    io::check_not_input(&args.out, &inputs)?;
-    if let Some(r) = &args.report {
-        io::check_not_input(r, &inputs)?;
-    }
+    let mut outputs = Plan::new(&inputs)
+        .force(args.force)
+        .output("--out", &args.out, Kind::Animation)
+        .output_opt("--report", args.report.as_ref(), Kind::Json)
+        .check()?;
 
+    crate::util::announce_reading(&inputs);
     let source_ref = io::read_mesh(&args.source_ref)?;
     let target = io::read_mesh(&args.target)?;
     let mut frames = read_frames(&frame_paths, &args.source_ref)?;
@@ -167,6 +177,7 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
     let corr = match (&args.markers, &args.correspondence) {
         (Some(m), _) => {
             let markers = Markers::read(m)?;
+            crate::util::announce_work("computing the correspondence", target.num_vertices());
             let t0 = Instant::now();
             let r = correspond(
                 &source_ref,
@@ -182,7 +193,7 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         }
         (None, Some(c)) => {
             let text = std::fs::read_to_string(c)
-                .with_context(|| format!("{}: cannot read", c.display()))?;
+                .with_context(|| format!("{}: cannot read the correspondence", c.display()))?;
             let corr =
                 Correspondence::from_json(&text).with_context(|| format!("{}", c.display()))?;
             report["correspondence"] = json!({ "file": c, "seconds": 0.0 });
@@ -191,6 +202,7 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         (None, None) => bail!("give --markers or --correspondence"),
     };
 
+    crate::util::announce_work("factorizing the transfer system", target.num_vertices());
     let t0 = Instant::now();
     let tr = AnimationTransfer::new(&source_ref, &target, &corr, &opts)?;
     let factor_s = t0.elapsed().as_secs_f64();
@@ -242,15 +254,11 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         );
     }
     let set = ShapeSet::new(target.clone(), out)?;
-    io::write_frames(
-        &args.out,
-        &set,
-        &FramesOptions {
-            fps: args.fps,
-            inputs,
-        },
-    )?;
-    eprintln!("wrote {}", args.out.display());
+    let frame_opts = FramesOptions {
+        fps: args.fps,
+        inputs,
+    };
+    outputs.frames(&args.out, &set, &frame_opts, |_| {})?;
     if let Some(r) = &args.report {
         report["timings"] = json!({
             "correspondence_s": report["correspondence"]["seconds"],
@@ -263,7 +271,9 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         report["target_triangles"] = json!(target.num_triangles());
         report["constraint_vertices"] = json!(tr.solver().constraint_vertices());
         report["flipped_triangles_per_frame"] = json!(flips);
-        crate::util::write_report(r, &report)?;
+        outputs.json(r, &report)?;
     }
+    outputs.commit()?;
+    eprintln!("wrote {}", args.out.display());
     Ok(())
 }

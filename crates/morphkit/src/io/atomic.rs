@@ -105,6 +105,10 @@ pub(crate) fn check_finite(path: &Path, positions: &[[f64; 3]]) -> Result<(), Io
 
 /// Canonical form of a path that may not exist yet: its existing parent canonicalized, plus
 /// the file name.
+pub fn canonical_path(path: &Path) -> PathBuf {
+    canonical(path)
+}
+
 fn canonical(path: &Path) -> PathBuf {
     if let Ok(p) = path.canonicalize() {
         return p;

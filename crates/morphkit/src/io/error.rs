@@ -129,6 +129,25 @@ impl IoError {
         }
     }
 
+    /// The same error about `path` instead (for a write staged to a temporary file).
+    pub fn at_path(mut self, path: &Path) -> Self {
+        match &mut self {
+            Self::Os { path: p, .. }
+            | Self::Empty { path: p }
+            | Self::IsDirectory { path: p }
+            | Self::UnknownFormat { path: p, .. }
+            | Self::Parse { path: p, .. }
+            | Self::Binary { path: p, .. }
+            | Self::Content { path: p, .. }
+            | Self::Gltf { path: p, .. }
+            | Self::InvalidMesh { path: p, .. }
+            | Self::ShapeSet { path: p, .. }
+            | Self::WouldOverwriteInput { path: p, .. }
+            | Self::NeedsReference { path: p } => *p = path.to_path_buf(),
+        }
+        self
+    }
+
     pub(crate) fn os(path: &Path, action: &'static str, cause: std::io::Error) -> Self {
         Self::Os {
             path: path.to_path_buf(),

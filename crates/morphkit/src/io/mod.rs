@@ -7,11 +7,14 @@
 //! | OFF | [`off`] | [`off`] | |
 //! | glTF / GLB | [`gltf`] | [`gltf`] | first mesh; morph targets and morph-weight animations |
 //! | PC2 | [`pc2`] | [`pc2`] | positions only; connectivity from a reference mesh |
+//! | weights | [`weights`] | | per-frame blend weights, JSON or CSV |
 //!
 //! Every read is validated once, on entry, with [`crate::mesh::validate`]: what it calls an
 //! error becomes [`IoError::InvalidMesh`] naming the file, its warnings are returned by
 //! [`read_mesh_with_report`]. Every write is atomic ([`write_atomic`]) and sequence writers never
-//! overwrite an input ([`check_not_input`]). Every error names the file.
+//! overwrite an input ([`check_not_input`]); several outputs of one command are written all or
+//! none ([`Staging`]). Text formats accept a UTF-8 byte-order mark ([`strip_bom`]). Every error
+//! names the file.
 
 mod atomic;
 pub mod colors;
@@ -24,17 +27,22 @@ pub mod pc2;
 pub mod ply;
 mod sequence;
 mod source;
+mod staging;
+pub mod weights;
 
-pub use atomic::{check_not_input, write_atomic};
+pub use atomic::{canonical_path, check_not_input, write_atomic};
 pub use colors::{diverging, scalar_colors, viridis, Colors, NAN_GREY};
 pub use error::IoError;
 pub use format::Format;
-pub use gltf::{read_gltf_morphs, write_gltf_morphs, GltfMorphs};
+pub use gltf::{parse_gltf_morphs, read_gltf_morphs, write_gltf_morphs, GltfMorphs};
 pub use ply::{write_ply_colored, PlyEncoding};
 pub use sequence::{
     frames_to_gltf, gltf_to_frames, obj_files, read_animation, read_shape_set, read_shape_set_with,
     write_frames, write_frames_with, FramesOptions,
 };
+pub use source::{strip_bom, strip_bom_str};
+pub use staging::{frame_files, is_frame_file_name, Staging};
+pub use weights::{parse_weights, read_weights, WeightRow};
 
 use crate::mesh::{validate, TriMesh, ValidationReport};
 use std::path::Path;

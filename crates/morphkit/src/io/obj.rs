@@ -20,6 +20,7 @@ use std::path::Path;
 /// coordinates, index 0, a relative index before the first vertex, a face with fewer than
 /// three vertices, and a face index beyond the file's vertex count.
 pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
+    let bytes = super::strip_bom(bytes);
     let mut positions: Vec<Point> = Vec::new();
     let mut polys = Polygons {
         offsets: vec![0],

@@ -11,6 +11,7 @@ use std::path::Path;
 
 /// Parses OFF text. `path` only names the file in errors, which name the line.
 pub fn parse_off(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
+    let bytes = super::strip_bom(bytes);
     // Non-empty, comment-stripped lines.
     let mut it = lines(bytes).filter_map(|(n, l)| {
         let l = match l.iter().position(|&b| b == b'#') {

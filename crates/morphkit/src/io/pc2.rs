@@ -73,7 +73,10 @@ pub fn parse_pc2(path: &Path, b: &[u8]) -> Result<PointCache, IoError> {
             format!("the header promises {ns} samples of 0 points"),
         ));
     }
-    let need = HEADER as u64 + 12 * np as u64 * ns as u64;
+    // Saturating: `np` and `ns` may each be up to 2³¹, and 12 · np · ns overflows 64 bits.
+    let need = (12 * np as u64)
+        .saturating_mul(ns as u64)
+        .saturating_add(HEADER as u64);
     if (b.len() as u64) < need {
         let full = (b.len() - HEADER) / (12 * np.max(1));
         return Err(IoError::binary(
@@ -152,4 +155,25 @@ pub fn write_pc2(path: &Path, cache: &PointCache) -> Result<(), IoError> {
         }
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod fuzz_regressions {
+    use super::*;
+
+    /// Found by `cargo fuzz` (target `pc2`): counts whose product overflowed the size check.
+    #[test]
+    fn huge_counts_are_an_error_not_an_overflow() {
+        let mut b = MAGIC.to_vec();
+        b.extend_from_slice(&1i32.to_le_bytes());
+        b.extend_from_slice(&i32::MAX.to_le_bytes());
+        b.extend_from_slice(&0f32.to_le_bytes());
+        b.extend_from_slice(&1f32.to_le_bytes());
+        b.extend_from_slice(&i32::MAX.to_le_bytes());
+        b.extend_from_slice(&[0; 12]);
+        let e = parse_pc2(Path::new("x.pc2"), &b).unwrap_err().to_string();
+        assert!(e.contains("the header promises 2147483647 samples"), "{e}");
+        // The byte count saturates instead of wrapping around.
+        assert!(e.contains(&format!("({} bytes)", u64::MAX)), "{e}");
+    }
 }

@@ -291,6 +291,7 @@ impl<'a> Values<'a, '_> {
 
 /// Parses a PLY file's bytes. `path` only names the file in errors.
 pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
+    let bytes = super::strip_bom(bytes);
     let h = parse_header(path, bytes)?;
     let body_bytes = &bytes[h.body..];
     let is_nl: fn(&u8) -> bool = |&b| b == b'\n';

@@ -5,6 +5,7 @@ use super::atomic::temp_sibling;
 use super::format::Format;
 use super::gltf::{read_gltf_morphs, write_gltf_morphs, GltfMorphs};
 use super::pc2::{parse_pc2, write_pc2, PointCache};
+use super::staging::commit_dir;
 use super::{check_not_input, obj, read_mesh, source::read_file, IoError};
 use crate::mesh::{ShapeSet, ShapeSetError};
 use std::path::{Path, PathBuf};
@@ -254,11 +255,6 @@ pub fn write_frames_with(
     }
 }
 
-/// True for the names [`write_frames_with`] gives frames: `frame_*.obj`.
-fn is_frame_name(name: &str) -> bool {
-    name.starts_with("frame_") && name.ends_with(".obj")
-}
-
 /// The directory case of [`write_frames_with`].
 fn write_frame_dir(
     out: &Path,
@@ -289,38 +285,6 @@ fn write_frame_dir(
         }
         on_frame(i);
     }
-    if !existed {
-        return std::fs::rename(&tmp, out).map_err(|e| {
-            let _ = std::fs::remove_dir_all(&tmp);
-            IoError::os(out, "move the finished frames into place", e)
-        });
-    }
-    // Stale frames of an earlier, longer sequence: listed before anything is moved.
-    let listed = std::fs::read_dir(out).map_err(|e| {
-        let _ = std::fs::remove_dir_all(&tmp);
-        IoError::os(out, "list the directory", e)
-    })?;
-    let stale: Vec<PathBuf> = listed
-        .filter_map(|e| e.ok())
-        .filter(|e| {
-            let n = e.file_name().to_string_lossy().into_owned();
-            is_frame_name(&n) && !names.contains(&n) && e.path().is_file()
-        })
-        .map(|e| e.path())
-        .collect();
-    for name in &names {
-        if let Err(e) = std::fs::rename(tmp.join(name), out.join(name)) {
-            let _ = std::fs::remove_dir_all(&tmp);
-            return Err(IoError::os(
-                &out.join(name),
-                "move the finished frame into place",
-                e,
-            ));
-        }
-    }
-    let _ = std::fs::remove_dir(&tmp);
-    for p in stale {
-        std::fs::remove_file(&p).map_err(|e| IoError::os(&p, "remove a stale frame", e))?;
-    }
-    Ok(())
+    // A new `out` is the renamed temporary directory; an existing one receives its frames.
+    commit_dir(&tmp, out)
 }

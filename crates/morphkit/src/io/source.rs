@@ -7,8 +7,13 @@ use std::path::Path;
 
 /// The bytes of `path`, decompressed when the file starts with the gzip magic `1f 8b`.
 ///
+/// A file named `*.gz` must be gzip data. Several concatenated gzip members are read as one
+/// stream (as `gunzip` does), and zero bytes after the last member (tape padding) are ignored;
+/// anything else after it is an error naming its byte offset.
+///
 /// Errors: a directory ([`IoError::IsDirectory`]), an unreadable file ([`IoError::Os`]), an
-/// empty file or an empty decompressed stream ([`IoError::Empty`]), a corrupt gzip stream.
+/// empty file or an empty decompressed stream ([`IoError::Empty`]), a `.gz` file that is not
+/// gzip data, a corrupt or truncated gzip stream, trailing data.
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, IoError> {
     if path.is_dir() {
         return Err(IoError::IsDirectory {
@@ -16,12 +21,19 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, IoError> {
         });
     }
     let raw = std::fs::read(path).map_err(|e| IoError::os(path, "read the file", e))?;
-    let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
-        let mut out = Vec::with_capacity(raw.len() * 4);
-        flate2::read::MultiGzDecoder::new(raw.as_slice())
-            .read_to_end(&mut out)
-            .map_err(|e| IoError::os(path, "decompress the gzip stream", e))?;
-        out
+    let named_gz = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
+    let bytes = if raw.starts_with(&GZIP_MAGIC) {
+        gunzip(path, &raw)?
+    } else if named_gz && !raw.is_empty() {
+        return Err(IoError::content(
+            path,
+            format!(
+                "is named .gz but is not gzip data (it starts with {}, not the gzip magic 1f 8b)",
+                hex_prefix(&raw)
+            ),
+        ));
     } else {
         raw
     };
@@ -31,6 +43,60 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, IoError> {
         });
     }
     Ok(bytes)
+}
+
+const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
+
+/// The first bytes of `b` in hex, for messages.
+fn hex_prefix(b: &[u8]) -> String {
+    let head: Vec<String> = b.iter().take(4).map(|x| format!("{x:02x}")).collect();
+    head.join(" ")
+}
+
+/// Decompresses every gzip member of `raw` (which starts with the gzip magic).
+pub(crate) fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>, IoError> {
+    let mut out = Vec::with_capacity(raw.len().saturating_mul(4));
+    let mut rest = raw;
+    let mut member = 0;
+    while !rest.is_empty() {
+        let offset = (raw.len() - rest.len()) as u64;
+        if member > 0 && !rest.starts_with(&GZIP_MAGIC) {
+            if rest.iter().all(|&b| b == 0) {
+                break;
+            }
+            return Err(IoError::binary(
+                path,
+                offset,
+                format!(
+                    "{} bytes of trailing data after the end of the gzip stream",
+                    rest.len()
+                ),
+            ));
+        }
+        let mut dec = flate2::bufread::GzDecoder::new(rest);
+        if let Err(e) = dec.read_to_end(&mut out) {
+            let message = if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                format!("the gzip stream (member {member}) is truncated")
+            } else {
+                format!("corrupt gzip stream (member {member}): {e}")
+            };
+            return Err(IoError::binary(path, offset, message));
+        }
+        rest = dec.into_inner();
+        member += 1;
+    }
+    Ok(out)
+}
+
+/// `bytes` without a leading UTF-8 byte-order mark (`EF BB BF`), which some Windows editors
+/// write at the start of text files. Every text format strips it before parsing.
+pub fn strip_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
+}
+
+/// Like [`strip_bom`], for text.
+pub fn strip_bom_str(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
 }
 
 /// Lines of `bytes` with their 1-based numbers, `\r\n` and `\n` endings stripped.

@@ -232,7 +232,7 @@ impl Correspondence {
 
     /// Parses and structurally validates JSON written by [`Correspondence::to_json`].
     pub fn from_json(text: &str) -> Result<Self, CorrespondenceError> {
-        let c: Self = serde_json::from_str(text)
+        let c: Self = serde_json::from_str(crate::io::strip_bom_str(text))
             .map_err(|e| CorrespondenceError::Invalid(format!("not a correspondence file: {e}")))?;
         c.validate()?;
         Ok(c)

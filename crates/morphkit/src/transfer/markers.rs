@@ -36,7 +36,7 @@ impl Markers {
         struct File {
             pairs: Vec<[i64; 2]>,
         }
-        let f: File = serde_json::from_str(text).map_err(|e| {
+        let f: File = serde_json::from_str(crate::io::strip_bom_str(text)).map_err(|e| {
             MarkerError::Parse(format!(
                 "expected {{\"pairs\": [[source, target], ...]}}: {e}"
             ))

@@ -16,10 +16,12 @@
 //! sampler on the node's `weights` path (what Blender and three.js play). Every accessor has its
 //! own buffer view, 4-byte aligned, with the proper `target` for vertex data and indices.
 
+mod buffers;
+mod precheck;
 mod read;
 mod write;
 
-pub use read::read_gltf_morphs;
+pub use read::{parse_gltf_morphs, read_gltf_morphs};
 pub use write::write_gltf_morphs;
 
 use crate::mesh::{Point, TriMesh};

@@ -1,6 +1,8 @@
 //! Reading glTF/GLB into [`GltfMorphs`].
 
+use super::buffers::load_buffers;
 use super::GltfMorphs;
+use crate::io::Format;
 use crate::io::{source::read_file, IoError};
 use crate::mesh::{Point, Polygons, TriMesh};
 use ::gltf::accessor::{DataType, Dimensions};
@@ -33,6 +35,15 @@ fn check_glb(path: &Path, b: &[u8]) -> Result<(), IoError> {
         ));
     }
     let length = u32_at(b, 8) as usize;
+    if length < 12 {
+        return Err(IoError::binary(
+            path,
+            8,
+            format!(
+                "the GLB header declares a length of {length} bytes, less than the header itself"
+            ),
+        ));
+    }
     if length > b.len() {
         return Err(IoError::binary(
             path,
@@ -80,21 +91,47 @@ fn check_glb(path: &Path, b: &[u8]) -> Result<(), IoError> {
 /// accessor has another count than the base `POSITION`, and weight outputs whose count does
 /// not match keys × targets.
 pub fn read_gltf_morphs(path: &Path) -> Result<GltfMorphs, IoError> {
-    let bytes = read_file(path)?;
-    if bytes.starts_with(b"glTF") {
+    parse_gltf_morphs(path, read_file(path)?)
+}
+
+/// Like [`read_gltf_morphs`], on the file's bytes (GLB or glTF JSON). `path` names the file in
+/// errors, says whether it should be GLB (by extension), and is the base of relative buffer
+/// URIs.
+pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoError> {
+    let is_glb = bytes.starts_with(b"glTF");
+    if is_glb {
         check_glb(path, &bytes)?;
+    } else if Format::from_path(path) == Some(Format::Glb) {
+        let looks_json = super::super::strip_bom(&bytes)
+            .trim_ascii_start()
+            .starts_with(b"{");
+        return Err(IoError::binary(
+            path,
+            0,
+            format!(
+                "not a GLB file: it does not start with the magic 'glTF'{}",
+                if looks_json {
+                    " (it looks like glTF JSON; name it .gltf)"
+                } else {
+                    ""
+                }
+            ),
+        ));
     }
     let gerr = |source| IoError::Gltf {
         path: path.to_path_buf(),
         cause: source,
     };
-    let gltf = ::gltf::Gltf::from_slice(&bytes).map_err(gerr)?;
-    let base_dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let buffers =
-        ::gltf::import_buffers(&gltf.document, Some(base_dir), gltf.blob.clone()).map_err(gerr)?;
+    super::precheck::check_positions(path, super::super::strip_bom(&bytes))?;
+    let mut gltf = if is_glb {
+        ::gltf::Gltf::from_slice(&bytes)
+    } else {
+        ::gltf::Gltf::from_slice(super::super::strip_bom(&bytes))
+    }
+    .map_err(gerr)?;
+    // The file's bytes are no longer needed: the BIN chunk was copied into the blob.
+    drop(bytes);
+    let buffers = load_buffers(path, &gltf.document, gltf.blob.take())?;
     let get = |b: ::gltf::Buffer| buffers.get(b.index()).map(|d| &d[..]);
     let doc = &gltf.document;
     let mesh = doc
@@ -226,16 +263,13 @@ pub fn read_gltf_morphs(path: &Path) -> Result<GltfMorphs, IoError> {
         ));
     }
     let base = TriMesh::from_polygons(positions, polys);
-    let targets: Vec<Vec<Point>> = displacements
-        .iter()
-        .map(|d| {
-            base.positions
-                .iter()
-                .zip(d)
-                .map(|(b, d)| [b[0] + d[0], b[1] + d[1], b[2] + d[2]])
-                .collect()
-        })
-        .collect();
+    // Displacements become absolute positions in place (no second copy of every target).
+    let mut targets = displacements;
+    for d in &mut targets {
+        for (q, b) in d.iter_mut().zip(&base.positions) {
+            *q = [b[0] + q[0], b[1] + q[1], b[2] + q[2]];
+        }
+    }
     let target_names = target_names(mesh.extras(), targets.len());
     let weight_keys = weight_keys(path, doc, mesh.index(), targets.len(), &get)?;
     Ok(GltfMorphs {

@@ -1,0 +1,424 @@
+//! Output planning shared by every subcommand: check every output location before any work,
+//! then write all outputs or none.
+//!
+//! A command lists its inputs and its outputs (each with the flag that named it and what it
+//! must hold) in a [`Plan`]. [`Plan::check`] fails, before anything is read or solved, when
+//! - an output is an input, or a directory holding one (compared after canonicalization);
+//! - two outputs are the same file, or one is a `frame_*.obj` file inside another's frame
+//!   directory;
+//! - an output's extension names no format it can hold (`transfer --out t.ply`);
+//! - an output's directory does not exist or cannot be written (`--report /proc/x.json`);
+//! - a frame directory already holds `frame_*.obj` files, which the write would replace or
+//!   delete, and `--force` was not given.
+//!
+//! The [`Outputs`] it returns stage every write to a temporary file next to its destination
+//! ([`morphkit::io::Staging`]); [`Outputs::commit`] moves them all into place once every one
+//! has been written. A failed write (or an error before the commit) leaves every destination
+//! as it was.
+
+use anyhow::bail;
+use morphkit::io::{self, Format, FramesOptions, GltfMorphs, Staging};
+use morphkit::{ShapeSet, TriMesh};
+use std::path::{Path, PathBuf};
+
+/// What an output holds, which decides the extensions it accepts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// One mesh: `.obj`, `.obj.gz`, `.ply`, `.off`, `.gltf` or `.glb`.
+    Mesh,
+    /// An animation: a frame directory (an existing directory or a path without extension),
+    /// `.glb`, `.gltf` or `.pc2`.
+    Animation,
+    /// Either, as the extension says (a single-frame blend).
+    MeshOrAnimation,
+    /// A JSON document (a report, a correspondence); any file name.
+    Json,
+}
+
+const MESH_EXTS: &str = ".obj, .obj.gz, .ply, .off, .gltf or .glb";
+const ANIM_EXTS: &str = "a directory (a path without extension), .glb, .gltf or .pc2";
+
+/// One planned output.
+#[derive(Clone, Debug)]
+struct Planned {
+    flag: String,
+    path: PathBuf,
+    kind: Kind,
+}
+
+/// The inputs and outputs of one command, checked together; see the module docs.
+#[derive(Debug, Default)]
+pub struct Plan {
+    inputs: Vec<PathBuf>,
+    outputs: Vec<Planned>,
+    force: bool,
+}
+
+/// True when `out` names a frame directory: an existing directory, or a path without extension.
+pub fn is_frame_dir(out: &Path) -> bool {
+    out.is_dir() || (!out.exists() && out.extension().is_none())
+}
+
+/// The directory a file `path` is created in.
+fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Fails unless a file can be created in the existing directory `dir` (tried with a probe
+/// file, removed at once: permission bits do not tell for root, read-only mounts or `/proc`).
+fn check_writable_dir(flag: &str, out: &Path, dir: &Path) -> anyhow::Result<()> {
+    if !dir.exists() {
+        bail!(
+            "{flag} {}: the directory {} does not exist",
+            out.display(),
+            dir.display()
+        );
+    }
+    if !dir.is_dir() {
+        bail!(
+            "{flag} {}: {} is not a directory",
+            out.display(),
+            dir.display()
+        );
+    }
+    let probe = dir.join(format!(".morphkit-probe-{}", std::process::id()));
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => bail!(
+            "{flag} {}: cannot write in the directory {}: {e}",
+            out.display(),
+            dir.display()
+        ),
+    }
+}
+
+/// The nearest existing ancestor of `p` (`.` for a relative path with none).
+fn existing_ancestor(p: &Path) -> PathBuf {
+    let mut cur = p.to_path_buf();
+    loop {
+        if cur.exists() {
+            return cur;
+        }
+        match cur.parent() {
+            Some(d) if !d.as_os_str().is_empty() => cur = d.to_path_buf(),
+            _ => return PathBuf::from("."),
+        }
+    }
+}
+
+impl Plan {
+    /// A plan for a command reading `inputs` (files and directories that must not be written).
+    pub fn new(inputs: &[PathBuf]) -> Self {
+        Self {
+            inputs: inputs.to_vec(),
+            ..Self::default()
+        }
+    }
+
+    /// Allows replacing the `frame_*.obj` files of an existing frame directory (`--force`).
+    pub fn force(mut self, force: bool) -> Self {
+        self.force = force;
+        self
+    }
+
+    /// Adds an output named by `flag` (for messages: `--out`, `--report`, `OUT`).
+    pub fn output(mut self, flag: &str, path: &Path, kind: Kind) -> Self {
+        self.outputs.push(Planned {
+            flag: flag.to_string(),
+            path: path.to_path_buf(),
+            kind,
+        });
+        self
+    }
+
+    /// Adds an output when `path` is given.
+    pub fn output_opt(self, flag: &str, path: Option<&PathBuf>, kind: Kind) -> Self {
+        match path {
+            Some(p) => self.output(flag, p, kind),
+            None => self,
+        }
+    }
+
+    /// Checks every output (see the module docs) and returns the writer for them.
+    pub fn check(self) -> anyhow::Result<Outputs> {
+        for o in &self.outputs {
+            io::check_not_input(&o.path, &self.inputs)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", o.flag))?;
+            self.check_format(o)?;
+        }
+        self.check_distinct()?;
+        for o in &self.outputs {
+            self.check_location(o)?;
+        }
+        Ok(Outputs {
+            staging: Staging::new(),
+        })
+    }
+
+    fn check_format(&self, o: &Planned) -> anyhow::Result<()> {
+        let p = o.path.display();
+        let fmt = Format::from_path(&o.path);
+        let frame_dir = is_frame_dir(&o.path);
+        match o.kind {
+            Kind::Mesh => {
+                if o.path.is_dir() {
+                    bail!(
+                        "{} {p}: is a directory, expected a mesh file ({MESH_EXTS})",
+                        o.flag
+                    );
+                }
+                if !fmt.is_some_and(|f| f != Format::Pc2) {
+                    bail!(
+                        "{} {p}: unsupported format for a mesh; expected {MESH_EXTS}",
+                        o.flag
+                    );
+                }
+            }
+            Kind::Animation => {
+                if !frame_dir && !fmt.is_some_and(Format::is_animation) {
+                    bail!(
+                        "{} {p}: unsupported format for an animation; expected {ANIM_EXTS}{}",
+                        o.flag,
+                        if fmt.is_some_and(Format::is_single_mesh) {
+                            " (this extension holds one mesh)"
+                        } else {
+                            ""
+                        }
+                    );
+                }
+            }
+            Kind::MeshOrAnimation => {
+                if !frame_dir && fmt.is_none() {
+                    bail!(
+                        "{} {p}: unsupported format; expected {ANIM_EXTS}, or {MESH_EXTS} for one frame",
+                        o.flag
+                    );
+                }
+            }
+            Kind::Json => {
+                if o.path.is_dir() {
+                    bail!("{} {p}: is a directory, expected a file name", o.flag);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn check_location(&self, o: &Planned) -> anyhow::Result<()> {
+        let frame_dir = o.kind != Kind::Json && o.kind != Kind::Mesh && is_frame_dir(&o.path);
+        if !frame_dir {
+            return check_writable_dir(&o.flag, &o.path, &parent_dir(&o.path));
+        }
+        if o.path.exists() {
+            check_writable_dir(&o.flag, &o.path, &o.path)?;
+            check_writable_dir(&o.flag, &o.path, &parent_dir(&o.path))?;
+            let old = io::frame_files(&o.path);
+            if !old.is_empty() && !self.force {
+                let name = |p: &PathBuf| {
+                    p.file_name()
+                        .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+                };
+                let range = if old.len() == 1 {
+                    name(&old[0])
+                } else {
+                    format!("{} … {}", name(&old[0]), name(&old[old.len() - 1]))
+                };
+                bail!(
+                    "{} {}: the directory already holds {} frame file{} ({range}), which this \
+                     write would replace or delete; pass --force to replace them, or give an \
+                     empty or new directory",
+                    o.flag,
+                    o.path.display(),
+                    old.len(),
+                    if old.len() == 1 { "" } else { "s" }
+                );
+            }
+            Ok(())
+        } else {
+            let anc = existing_ancestor(&o.path);
+            check_writable_dir(&o.flag, &o.path, &anc)
+        }
+    }
+
+    fn check_distinct(&self) -> anyhow::Result<()> {
+        let canon: Vec<PathBuf> = self
+            .outputs
+            .iter()
+            .map(|o| io::canonical_path(&o.path))
+            .collect();
+        for (i, a) in self.outputs.iter().enumerate() {
+            for (j, b) in self.outputs.iter().enumerate().skip(i + 1) {
+                if canon[i] == canon[j] {
+                    bail!(
+                        "{} and {} are the same file {}; every output of one command needs its own path",
+                        a.flag,
+                        b.flag,
+                        b.path.display()
+                    );
+                }
+            }
+            let a_dir = a.kind != Kind::Json && a.kind != Kind::Mesh && is_frame_dir(&a.path);
+            for (j, b) in self.outputs.iter().enumerate() {
+                let inside = canon[j].parent() == Some(canon[i].as_path())
+                    && b.path
+                        .file_name()
+                        .is_some_and(|n| io::is_frame_file_name(&n.to_string_lossy()));
+                if i != j && a_dir && inside {
+                    bail!(
+                        "{} {} is a frame file inside the frame directory of {} {}; give it another name or place",
+                        b.flag,
+                        b.path.display(),
+                        a.flag,
+                        a.path.display()
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Writers for the outputs of a checked [`Plan`]: everything is staged, and
+/// [`Outputs::commit`] moves it all into place.
+#[derive(Debug)]
+pub struct Outputs {
+    staging: Staging,
+}
+
+impl Outputs {
+    /// Stages one mesh (format by extension).
+    pub fn mesh(&mut self, path: &Path, mesh: &TriMesh) -> anyhow::Result<()> {
+        Ok(self
+            .staging
+            .write(path, false, |tmp| io::write_mesh(tmp, mesh))?)
+    }
+
+    /// Stages a binary PLY with colours.
+    pub fn colored_ply(
+        &mut self,
+        path: &Path,
+        mesh: &TriMesh,
+        colors: &io::Colors,
+    ) -> anyhow::Result<()> {
+        Ok(self
+            .staging
+            .write(path, false, |tmp| io::write_ply_colored(tmp, mesh, colors))?)
+    }
+
+    /// Stages a glTF rig.
+    pub fn gltf(&mut self, path: &Path, rig: &GltfMorphs) -> anyhow::Result<()> {
+        Ok(self
+            .staging
+            .write(path, false, |tmp| io::write_gltf_morphs(tmp, rig))?)
+    }
+
+    /// Stages an animation (a frame directory, `.glb`/`.gltf` or `.pc2`), calling
+    /// `on_frame(i)` after each OBJ frame.
+    pub fn frames(
+        &mut self,
+        path: &Path,
+        frames: &ShapeSet,
+        opts: &FramesOptions,
+        on_frame: impl FnMut(usize),
+    ) -> anyhow::Result<()> {
+        let dir = is_frame_dir(path);
+        Ok(self.staging.write(path, dir, |tmp| {
+            io::write_frames_with(tmp, frames, opts, on_frame)
+        })?)
+    }
+
+    /// Stages a JSON document (pretty-printed).
+    pub fn json(&mut self, path: &Path, value: &serde_json::Value) -> anyhow::Result<()> {
+        let text = serde_json::to_string_pretty(value)?;
+        self.text(path, &text)
+    }
+
+    /// Stages a text file.
+    pub fn text(&mut self, path: &Path, text: &str) -> anyhow::Result<()> {
+        Ok(self
+            .staging
+            .write(path, false, |tmp| io::write_atomic(tmp, text.as_bytes()))?)
+    }
+
+    /// Moves every staged output into place.
+    pub fn commit(self) -> anyhow::Result<()> {
+        Ok(self.staging.commit()?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmp_dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("morphkit-plan-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn outputs_must_be_distinct_writable_and_of_the_right_format() {
+        let d = tmp_dir("check");
+        let input = d.join("in.obj");
+        std::fs::write(&input, "v 0 0 0\n").unwrap();
+        let ins = [input.clone()];
+        let e = |p: Plan| p.check().unwrap_err().to_string();
+        let x = d.join("x.json");
+        let s = e(Plan::new(&ins).output("--out", &x, Kind::Json).output(
+            "--report",
+            &d.join(".").join("x.json"),
+            Kind::Json,
+        ));
+        assert!(s.contains("--out and --report are the same file"), "{s}");
+        let s = e(Plan::new(&ins).output("--out", &input, Kind::Mesh));
+        assert!(s.contains("refusing to overwrite"), "{s}");
+        let s = e(Plan::new(&ins).output("--out", &d.join("t.ply"), Kind::Animation));
+        assert!(s.contains("--out") && s.contains("holds one mesh"), "{s}");
+        let s = e(Plan::new(&ins).output("--out", &d.join("nodir/x.obj"), Kind::Mesh));
+        assert!(s.contains("does not exist"), "{s}");
+        let s = e(Plan::new(&ins)
+            .output("--out", &d.join("frames"), Kind::Animation)
+            .output("--report", &d.join("frames/frame_0000.obj"), Kind::Json));
+        assert!(s.contains("inside the frame directory"), "{s}");
+        if Path::new("/proc/self").exists() {
+            let s = e(Plan::new(&ins).output("--report", Path::new("/proc/x.json"), Kind::Json));
+            assert!(s.contains("cannot write in the directory /proc"), "{s}");
+        }
+        assert!(Plan::new(&ins)
+            .output("--out", &d.join("new/deeper/frames"), Kind::Animation)
+            .output("--report", &x, Kind::Json)
+            .check()
+            .is_ok());
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn existing_frames_need_force() {
+        let d = tmp_dir("force");
+        std::fs::write(d.join("frame_0005.obj"), "old").unwrap();
+        let s = Plan::new(&[])
+            .output("OUT", &d, Kind::Animation)
+            .check()
+            .unwrap_err()
+            .to_string();
+        assert!(s.contains("frame_0005.obj") && s.contains("--force"), "{s}");
+        assert!(Plan::new(&[])
+            .force(true)
+            .output("OUT", &d, Kind::Animation)
+            .check()
+            .is_ok());
+        let _ = std::fs::remove_dir_all(&d);
+    }
+}

@@ -1,0 +1,10 @@
+//! Fuzzes the PLY reader: any bytes give a mesh that passes validation or an error, never a panic.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+use std::path::Path;
+
+fuzz_target!(|data: &[u8]| {
+    if let Ok(mesh) = morphkit::io::ply::parse_ply(Path::new("fuzz.ply"), data) {
+        let _ = morphkit::mesh::validate(&mesh);
+    }
+});
