@@ -66,8 +66,8 @@ pub enum SynthError {
         /// Its weight.
         value: f64,
     },
-    /// Two `blend` layers both fully select the same triangles on the same output frames.
-    #[error("layer {second} ({second_mode}) and layer {first} ({first_mode}) both fully select {count} triangles (first: {triangle}) at output frame {frame}: two blend layers cannot both drive a region; make the later one compound, or split the scribbles or the frame ranges")]
+    /// A later blend layer at weight 1 would erase an earlier layer that also has weight 1.
+    #[error("layer {second} ({second_mode}) fully covers {count} triangles (first: {triangle}) that layer {first} ({first_mode}) also drives at weight 1, at output frame {frame}: a blend layer replaces what is below it; make the later one compound, or split the scribbles or the frame ranges")]
     ContradictingLayers {
         /// The earlier layer (0-based).
         first: usize,
@@ -92,6 +92,24 @@ pub enum SynthError {
         /// What went wrong.
         #[source]
         source: TransferError,
+    },
+    /// A step of building layer `layer` failed.
+    #[error("layer {layer}: {source}")]
+    InLayer {
+        /// The layer (0-based).
+        layer: usize,
+        /// What went wrong.
+        #[source]
+        source: Box<SynthError>,
+    },
+    /// Pose edit `pose` failed.
+    #[error("pose {pose}: {source}")]
+    InPose {
+        /// The pose edit (0-based).
+        pose: usize,
+        /// What went wrong.
+        #[source]
+        source: Box<SynthError>,
     },
     /// Transfer (gradients, correspondence check or solve) failed.
     #[error(transparent)]

@@ -22,7 +22,9 @@ pub mod flexibility;
 pub mod geodesic;
 pub mod gradient_blend;
 pub mod partitions;
+pub mod pose;
 pub mod scribble;
+pub mod synthesizer;
 pub mod weights;
 
 pub use error::SynthError;
@@ -30,5 +32,10 @@ pub use flexibility::{flexibility, Flexibility, FlexibilityAccumulator};
 pub use geodesic::{geodesic_distance, geodesic_weights, HeatGeodesics, HeatOptions};
 pub use gradient_blend::{apply_layer, blend_gradient, blend_gradients, BlendMode};
 pub use partitions::{partitions, Partitions, GAMMA};
+pub use pose::{axis_angle, rotation_gradients, PoseEdit, PoseEditor};
 pub use scribble::{refine_scribble, Scribble, Selection};
+pub use synthesizer::{
+    synthesize, BlendRegion, LayerInfo, LayerSpec, PoseSpec, SynthFrame, SynthOptions, Synthesizer,
+    Timing,
+};
 pub use weights::{blend_weights, BlendWeights, WeightSolver, KAPPA};
