@@ -6,5 +6,7 @@ pub mod blend;
 pub mod convert;
 pub mod correspond;
 pub mod demo;
+pub mod flex;
 pub mod info;
+pub mod synth;
 pub mod transfer;

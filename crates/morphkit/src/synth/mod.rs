@@ -17,22 +17,28 @@
 //! Every solve of positions goes through [`crate::transfer::TransferSolver`], factored once
 //! per target.
 
+pub mod colors;
 pub mod error;
 pub mod flexibility;
 pub mod geodesic;
 pub mod gradient_blend;
 pub mod partitions;
 pub mod pose;
+pub mod recipe;
+pub mod recipe_build;
 pub mod scribble;
 pub mod synthesizer;
 pub mod weights;
 
+pub use colors::{flexibility_colors, selection_colors};
 pub use error::SynthError;
 pub use flexibility::{flexibility, Flexibility, FlexibilityAccumulator};
 pub use geodesic::{geodesic_distance, geodesic_weights, HeatGeodesics, HeatOptions};
 pub use gradient_blend::{apply_layer, blend_gradient, blend_gradients, BlendMode};
 pub use partitions::{partitions, Partitions, GAMMA};
 pub use pose::{axis_angle, rotation_gradients, PoseEdit, PoseEditor};
+pub use recipe::{Recipe, RecipeError, RecipeFile};
+pub use recipe_build::BuiltRecipe;
 pub use scribble::{refine_scribble, Scribble, Selection};
 pub use synthesizer::{
     synthesize, BlendRegion, LayerInfo, LayerSpec, PoseSpec, SynthFrame, SynthOptions, Synthesizer,
