@@ -34,7 +34,7 @@ pub use colors::{flexibility_colors, selection_colors};
 pub use error::SynthError;
 pub use flexibility::{flexibility, Flexibility, FlexibilityAccumulator};
 pub use geodesic::{geodesic_distance, geodesic_weights, HeatGeodesics, HeatOptions};
-pub use gradient_blend::{apply_layer, blend_gradient, blend_gradients, BlendMode};
+pub use gradient_blend::{apply_layer, blend_gradient, blend_gradients, polar, BlendMode};
 pub use partitions::{partitions, Partitions, GAMMA};
 pub use pose::{axis_angle, rotation_gradients, PoseEdit, PoseEditor};
 pub use recipe::{Recipe, RecipeError, RecipeFile};

@@ -168,6 +168,9 @@ struct Layer {
     timing: Timing,
     placement: Placement,
     weight_solver: Option<WeightSolver>,
+    /// Source triangles matched by a target triangle of positive weight: the only ones whose
+    /// gradients are blended between source frames.
+    needed: Vec<bool>,
     info: LayerInfo,
 }
 
@@ -308,7 +311,16 @@ impl Synthesizer {
             check_layer(&spec, target).map_err(in_layer)?;
             let (info, weight_solver) =
                 layer_info(&spec, k, target, &topology, &mut heat, opts).map_err(in_layer)?;
+            let mut needed = vec![false; spec.source_reference.num_triangles()];
+            for (t, &w) in info.weights.values.iter().enumerate() {
+                if w > 0.0 {
+                    for &m in spec.correspondence.matches_of(t) {
+                        needed[m as usize] = true;
+                    }
+                }
+            }
             built.push(Layer {
+                needed,
                 gradients: GradientOperator::new(&spec.source_reference),
                 placement: Placement::new(
                     &spec.source_reference,
@@ -452,7 +464,7 @@ impl Synthesizer {
         let mut g = grad(i)?;
         if frac > 0.0 {
             let next = grad(j)?;
-            for (a, b) in g.iter_mut().zip(&next) {
+            for ((a, b), _) in g.iter_mut().zip(&next).zip(&layer.needed).filter(|x| *x.1) {
                 *a = blend_gradient(a, b, frac);
             }
         }
