@@ -176,12 +176,15 @@ impl RecipeFile {
         let recipe: Recipe = toml::from_str(text).map_err(|e| {
             let line = e.span().map_or(1, |s| line_of(text, s.start));
             let message = e.message().replace('\n', " ");
-            // Name the key when the message quotes one (unknown field, missing field).
-            let key = e
-                .message()
-                .split('`')
-                .nth(1)
-                .map_or_else(|| "recipe".to_string(), str::to_string);
+            // The key: a missing field's name, else the key written on the failing line.
+            let key = match e.message().split_once("missing field `") {
+                Some((_, rest)) => rest.split('`').next().unwrap_or("recipe").to_string(),
+                None => text
+                    .lines()
+                    .nth(line - 1)
+                    .and_then(|l| l.split_once('='))
+                    .map_or_else(|| "recipe".to_string(), |(k, _)| k.trim().to_string()),
+            };
             RecipeError {
                 path: path.to_path_buf(),
                 line,
