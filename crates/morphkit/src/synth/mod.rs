@@ -36,7 +36,7 @@ pub use flexibility::{flexibility, Flexibility, FlexibilityAccumulator};
 pub use geodesic::{geodesic_distance, geodesic_weights, HeatGeodesics, HeatOptions};
 pub use gradient_blend::{apply_layer, blend_gradient, blend_gradients, polar, BlendMode};
 pub use partitions::{partitions, Partitions, GAMMA};
-pub use pose::{axis_angle, rotation_gradients, PoseEdit, PoseEditor};
+pub use pose::{axis_angle, edit_pose, rotation_gradients, PoseEdit, PoseEditor};
 pub use recipe::{Recipe, RecipeError, RecipeFile};
 pub use recipe_build::BuiltRecipe;
 pub use scribble::{refine_scribble, Scribble, Selection};

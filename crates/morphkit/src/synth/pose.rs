@@ -156,6 +156,27 @@ impl<'a> PoseEditor<'a> {
     }
 }
 
+/// One-shot pose edit: factors the target's transfer solve and Eq. 5 for `partitions`, then
+/// rotates the partitions that `scribble` (one entry per triangle) selects by `angle` radians
+/// about `axis`. For repeated edits keep a [`PoseEditor`] (or use
+/// [`super::Synthesizer::edit_pose`]).
+pub fn edit_pose(
+    target: &crate::mesh::TriMesh,
+    partitions: &Partitions,
+    scribble: &[bool],
+    axis: [f64; 3],
+    angle: f64,
+) -> Result<PoseEdit, SynthError> {
+    let solver = TransferSolver::new(target, &crate::transfer::SolverOptions::default())?;
+    let topo = crate::mesh::Topology::new(target.num_vertices(), &target.triangles);
+    let ws = WeightSolver::new(&topo, &partitions.stiff_mask(), super::KAPPA)?;
+    let editor = PoseEditor::new(&solver, &ws, partitions, &target.triangles)?;
+    editor.rotate(
+        &Selection::refine(partitions, scribble)?,
+        &axis_angle(axis, angle)?,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -216,6 +237,10 @@ mod tests {
         let e0 = Vector3::from(sub(bar.positions[b], bar.positions[a]));
         let e1 = Vector3::from(sub(edit.positions[b], edit.positions[a]));
         assert!((r * e0 - e1).norm() < 2e-2 * e0.norm(), "{e0} → {e1}");
+        let once = edit_pose(&bar, &p, &far, [0.0, 0.0, 1.0], 0.5).unwrap();
+        for (a, b) in once.positions.iter().zip(&edit.positions) {
+            assert!(norm(sub(*a, *b)) < 1e-12);
+        }
         assert!(axis_angle([0.0; 3], 1.0).is_err());
     }
 }
