@@ -55,6 +55,8 @@ source_frames = ["frames/bend-0.obj", "frames/bend-1.obj"]
 scribble = "near.json"
 mode = "compound"
 offset = 2
+blend_region = "geodesic"
+blend_width = 0.1
 "#;
 
 fn build(dir: &Path, text: &str) -> Result<morphkit::synth::BuiltRecipe, RecipeError> {
@@ -73,6 +75,10 @@ fn a_good_recipe_builds_and_runs() {
         assert!(f.unwrap().positions.iter().flatten().all(|c| c.is_finite()));
     }
     assert!(b.inputs.iter().any(|p| p.ends_with("far.json")));
+    // The geodesic layer: exact 1 deep inside the scribble, 0 far outside, a band between.
+    let w = &b.synthesizer.layer_info(1).weights.values;
+    assert!(w.contains(&1.0) && w.contains(&0.0));
+    assert!(w.iter().any(|&v| v > 0.0 && v < 1.0));
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -135,6 +141,12 @@ fn bad_input_names_the_recipe_line() {
         15,
         "markers",
         "animates the target itself",
+    );
+    check(
+        GOOD.replace("blend_width = 0.1", "blend_width = -1.0"),
+        18,
+        "blend_width",
+        "must be positive",
     );
     let _ = std::fs::remove_dir_all(&d);
 }
