@@ -285,6 +285,20 @@ fn timing_offset_speed_and_loop() {
     let z = shift(&s.frame(7).unwrap().positions);
     assert!(max_dist(&shift(&s.frame(2).unwrap().positions), &shift(&plain[0])) < 1e-9);
     assert!(max_dist(&y, &z) > 1e-6);
+    // A single-frame layer is a pose held from its offset on.
+    let mut pose = layer(
+        &m,
+        vec![frames[2].clone()],
+        vec![true; m.num_triangles()],
+        BlendMode::Blend,
+    );
+    pose.timing.offset = 3;
+    let s = Synthesizer::new(&m, vec![pose], &[], &opts).unwrap();
+    assert!(max_dist(&s.frame(2).unwrap().positions, &m.positions) < 1e-9);
+    for f in [3, 9] {
+        let x = shift(&s.frame(f).unwrap().positions);
+        assert!(max_dist(&x, &shift(&plain[2])) < 1e-9, "frame {f}");
+    }
 }
 
 #[test]

@@ -16,7 +16,7 @@
 //! blends the two neighbouring source frames' gradients ([`super::blend_gradient`]). With
 //! `looped` the time wraps modulo the frame count (the last frame blends into the first);
 //! otherwise the layer is inactive outside $[0, n-1]$ and its region falls back to the layers
-//! below.
+//! below. A single-frame layer is a pose: it holds from `offset` on.
 //!
 //! **Contradiction.** A `blend` layer at weight exactly 1 replaces whatever is below it, so a
 //! later blend layer that fully covers triangles an earlier layer (of either mode) also drives
@@ -181,6 +181,9 @@ impl Layer {
         if f < self.timing.offset {
             return None;
         }
+        if n == 1 {
+            return Some((0, 0, 0.0));
+        }
         let mut s = (f - self.timing.offset) as f64 * self.timing.speed;
         if self.timing.looped {
             s = s.rem_euclid(n as f64);
@@ -205,7 +208,7 @@ pub struct SynthFrame {
     pub positions: Vec<Point>,
     /// The wanted gradients $N_t$ the solve matched.
     pub gradients: Vec<Matrix3<f64>>,
-    /// Seconds spent blending gradients, and in the solve.
+    /// Seconds spent computing and blending the layers' gradients.
     pub blend_seconds: f64,
     /// Seconds in the solve and placement.
     pub solve_seconds: f64,
