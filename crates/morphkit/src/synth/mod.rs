@@ -22,6 +22,7 @@ pub mod error;
 pub mod flexibility;
 pub mod geodesic;
 pub mod gradient_blend;
+mod layer;
 pub mod partitions;
 pub mod pose;
 pub mod recipe;
