@@ -1,4 +1,4 @@
-//! `morphkit`: physical blendshapes and animation transfer from the command line.
+//! `morphkit`: physical blendshapes, animation transfer and synthesis from the command line.
 
 mod cmd;
 mod outputs;
@@ -29,6 +29,10 @@ enum Command {
     Correspond(cmd::correspond::CorrespondArgs),
     /// Transfer an animation from a source mesh onto a different target mesh.
     Transfer(cmd::transfer::TransferArgs),
+    /// Show how flexible each triangle of an animation is (where markers are needed).
+    Flex(cmd::flex::FlexArgs),
+    /// Assemble a new animation from parts of several animations, by a TOML recipe.
+    Synth(cmd::synth::SynthArgs),
     /// Measure solver speed on generated and real meshes.
     Bench(cmd::bench::BenchArgs),
 }
@@ -42,6 +46,8 @@ fn main() {
         Command::Blend(a) => cmd::blend::run(a),
         Command::Correspond(a) => cmd::correspond::run(a),
         Command::Transfer(a) => cmd::transfer::run(a),
+        Command::Flex(a) => cmd::flex::run(a),
+        Command::Synth(a) => cmd::synth::run(a),
         Command::Bench(a) => cmd::bench::run(a),
     };
     if let Err(e) = result {

@@ -157,3 +157,11 @@ mod tests {
         assert!(e.starts_with("--fps 1e-300: must be at least 0.001"), "{e}");
     }
 }
+
+/// Writes a JSON report atomically (temporary file, then rename). Subcommands that plan all
+/// their outputs up front use [`crate::outputs::Outputs::json`] instead.
+pub fn write_report(path: &std::path::Path, value: &serde_json::Value) -> anyhow::Result<()> {
+    let text = serde_json::to_string_pretty(value)?;
+    morphkit::io::write_atomic(path, text.as_bytes()).map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(())
+}

@@ -9,6 +9,8 @@
 //! - **Example-driven animation transfer** (Wang & Lee 2008, building on Sumner & Popović 2004):
 //!   marker correspondence by least-squares meshes and deformation-gradient transfer onto a
 //!   different mesh. See [`transfer`].
+//! - **Animation synthesis** (Wang & Lee 2008): parts of several animations assembled on one
+//!   target by scribbles, blend weights and rotation-aware gradient blending. See [`synth`].
 //!
 //! Set-up once, then many cheap solves (here a slider from straight to bent):
 //!
@@ -39,6 +41,7 @@ pub mod io;
 pub mod mesh;
 pub mod sparse;
 pub mod springs;
+pub mod synth;
 pub mod transfer;
 
 pub use mesh::{ShapeSet, TriMesh};

@@ -1,4 +1,5 @@
-//! `morphkit bench`: speed of the physical-blend solver (and of transfer, with data).
+//! `morphkit bench`: speed of the physical-blend solver (and of transfer and synthesis, with
+//! data).
 //!
 //! The spring suite times a 36-step α sequence (the paper's Table I protocol) at about 2k,
 //! 8.5k and 18.6k vertices, on generated bent tubes and, when the data directory is given, on
@@ -15,10 +16,10 @@ use std::time::Instant;
 /// Arguments of `morphkit bench`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  morphkit bench\n  morphkit bench --data ../shared/data --report bench.json\n  morphkit bench --suite springs --steps 36"
+    after_help = "Examples:\n  morphkit bench\n  morphkit bench --data ../shared/data --report bench.json\n  morphkit bench --suite springs --steps 36\n  morphkit bench --suite synth --data ../shared/data"
 )]
 pub struct BenchArgs {
-    /// Which suite to run: springs, transfer, or all.
+    /// Which suite to run: springs, transfer, synth, or all.
     #[arg(long, default_value = "all")]
     suite: String,
     /// Directory of the real test meshes (defaults to $MORPHKIT_DATA when set).
@@ -228,9 +229,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             args.steps
         );
     }
-    if !matches!(args.suite.as_str(), "springs" | "transfer" | "memory" | "all") {
+    if !matches!(args.suite.as_str(), "springs" | "transfer" | "memory" | "synth" | "all") {
         anyhow::bail!(
-            "unknown suite '{}': use springs, transfer, memory or all",
+            "unknown suite '{}': use springs, transfer, memory, synth or all",
             args.suite
         );
     }
@@ -249,6 +250,14 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         match data.as_deref() {
             Some(dir) => report["transfer"] = super::bench_transfer::run_transfer_bench(dir)?,
             None => println!("transfer suite skipped: it needs --data DIR or MORPHKIT_DATA (elephant, horse, camel)"),
+        }
+    }
+    if matches!(args.suite.as_str(), "synth" | "all") {
+        match data.as_deref() {
+            Some(dir) => report["synth"] = super::bench_synth::run_synth_bench(dir)?,
+            None => {
+                println!("synth suite skipped: it needs --data DIR or MORPHKIT_DATA (elephant)")
+            }
         }
     }
     if let Some(path) = &args.report {

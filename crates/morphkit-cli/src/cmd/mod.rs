@@ -1,10 +1,13 @@
 //! One module per subcommand: its clap arguments and its `run`.
 
 pub mod bench;
+pub mod bench_synth;
 pub mod bench_transfer;
 pub mod blend;
 pub mod convert;
 pub mod correspond;
 pub mod demo;
+pub mod flex;
 pub mod info;
+pub mod synth;
 pub mod transfer;

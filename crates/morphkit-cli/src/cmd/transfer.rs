@@ -77,7 +77,7 @@ pub struct TransferArgs {
 }
 
 /// Reads the source frames in any of the accepted forms.
-fn read_frames(paths: &[PathBuf], source_ref: &Path) -> anyhow::Result<ShapeSet> {
+pub(crate) fn read_frames(paths: &[PathBuf], source_ref: &Path) -> anyhow::Result<ShapeSet> {
     if let [one] = paths {
         let animated = one.is_dir()
             || matches!(

@@ -51,12 +51,75 @@ pub struct AnimationTransfer {
     source_reference: TriMesh,
     /// The target reference's normals, for [`AnimationTransfer::flipped_triangles`].
     target_flips: FlipCheck,
+    placement: Placement,
+    combine: GradientCombine,
+}
+
+/// The translation convention on its own ([`TranslationMode`], module doc), so that a caller
+/// with its own prefactored [`TransferSolver`] (animation synthesis, which drives one target
+/// from several sources) places frames exactly as [`AnimationTransfer`] does.
+#[derive(Clone, Debug)]
+pub struct Placement {
     anchors: Vec<[u32; 2]>,
     source_anchor_ref: Point,
     target_anchor_ref: Point,
     scale: f64,
-    combine: GradientCombine,
-    translation: TranslationMode,
+    mode: TranslationMode,
+}
+
+impl Placement {
+    /// The anchors of `correspondence` and their reference centroids on both meshes.
+    pub fn new(
+        source_reference: &TriMesh,
+        target: &TriMesh,
+        correspondence: &Correspondence,
+        mode: TranslationMode,
+    ) -> Self {
+        let anchors = correspondence.anchor_pairs();
+        let source_anchor_ref = centroid(&source_reference.positions, anchors.iter().map(|a| a[0]));
+        let target_anchor_ref = centroid(&target.positions, anchors.iter().map(|a| a[1]));
+        let ds = source_reference.bbox_diagonal();
+        let scale = if ds > 0.0 {
+            target.bbox_diagonal() / ds
+        } else {
+            1.0
+        };
+        Self {
+            anchors,
+            source_anchor_ref,
+            target_anchor_ref,
+            scale,
+            mode,
+        }
+    }
+
+    /// Size ratio $d_t / d_s$.
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
+    /// Translates a solved target frame `x` by the convention; `source_frame` supplies the
+    /// source anchor centroid (`None`: the target's anchors stay at their reference centroid).
+    /// [`TranslationMode::FixedVertex`] leaves `x` as the solve placed it.
+    pub fn apply(&self, x: &mut [Point], source_frame: Option<&[Point]>) {
+        if self.mode != TranslationMode::FollowMarkers {
+            return;
+        }
+        let now = centroid(x, self.anchors.iter().map(|a| a[1]));
+        let mut want = self.target_anchor_ref;
+        if let Some(f) = source_frame {
+            let s = centroid(f, self.anchors.iter().map(|a| a[0]));
+            for k in 0..3 {
+                want[k] += self.scale * (s[k] - self.source_anchor_ref[k]);
+            }
+        }
+        let shift = [0, 1, 2].map(|k| want[k] - now[k]);
+        for p in x.iter_mut() {
+            for k in 0..3 {
+                p[k] += shift[k];
+            }
+        }
+    }
 }
 
 fn centroid(p: &[Point], idx: impl Iterator<Item = u32>) -> Point {
@@ -86,27 +149,15 @@ impl AnimationTransfer {
         })?;
         correspondence.check(source_reference, target)?;
         let solver = TransferSolver::new(target, &opts.solver)?;
-        let anchors = correspondence.anchor_pairs();
-        let source_anchor_ref = centroid(&source_reference.positions, anchors.iter().map(|a| a[0]));
-        let target_anchor_ref = centroid(&target.positions, anchors.iter().map(|a| a[1]));
-        let ds = source_reference.bbox_diagonal();
-        let scale = if ds > 0.0 {
-            target.bbox_diagonal() / ds
-        } else {
-            1.0
-        };
+        let placement = Placement::new(source_reference, target, correspondence, opts.translation);
         Ok(Self {
             gradients: GradientOperator::new(source_reference),
             correspondence: correspondence.clone(),
             solver,
             source_reference: source_reference.clone(),
             target_flips: FlipCheck::new(target),
-            anchors,
-            source_anchor_ref,
-            target_anchor_ref,
-            scale,
+            placement,
             combine: opts.combine,
-            translation: opts.translation,
         })
     }
 
@@ -122,7 +173,7 @@ impl AnimationTransfer {
 
     /// Size ratio $d_t / d_s$ used by the translation convention.
     pub fn scale(&self) -> f64 {
-        self.scale
+        self.placement.scale()
     }
 
     /// Gradients of every source triangle of `frame` relative to the source reference.
@@ -163,22 +214,7 @@ impl AnimationTransfer {
         source_frame: Option<&[Point]>,
     ) -> Result<Vec<Point>, TransferError> {
         let mut x = self.solver.solve(target_gradients)?;
-        if self.translation == TranslationMode::FollowMarkers {
-            let now = centroid(&x, self.anchors.iter().map(|a| a[1]));
-            let mut want = self.target_anchor_ref;
-            if let Some(f) = source_frame {
-                let s = centroid(f, self.anchors.iter().map(|a| a[0]));
-                for k in 0..3 {
-                    want[k] += self.scale * (s[k] - self.source_anchor_ref[k]);
-                }
-            }
-            let shift = [0, 1, 2].map(|k| want[k] - now[k]);
-            for p in &mut x {
-                for k in 0..3 {
-                    p[k] += shift[k];
-                }
-            }
-        }
+        self.placement.apply(&mut x, source_frame);
         Ok(x)
     }
 

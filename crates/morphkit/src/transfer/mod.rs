@@ -22,7 +22,9 @@ pub mod solve;
 #[cfg(test)]
 pub(crate) mod testmesh;
 
-pub use animation::{transfer_animation, AnimationTransfer, TransferOptions, TranslationMode};
+pub use animation::{
+    transfer_animation, AnimationTransfer, Placement, TransferOptions, TranslationMode,
+};
 pub use correspondence::{
     correspond, Correspondence, CorrespondenceOptions, CorrespondenceResult, GradientCombine,
     MarkerResidual,
