@@ -18,9 +18,11 @@
 
 mod read;
 mod write;
+mod write_scene;
 
 pub use read::read_gltf_morphs;
 pub use write::write_gltf_morphs;
+pub use write_scene::{write_gltf_scene, GltfRigidMesh};
 
 use crate::mesh::{Point, TriMesh};
 
