@@ -17,7 +17,7 @@ use std::time::Instant;
     after_help = "Examples:\n  morphkit bench\n  morphkit bench --data ../shared/data --report bench.json\n  morphkit bench --suite springs --steps 36"
 )]
 pub struct BenchArgs {
-    /// Which suite to run: springs, transfer, or all.
+    /// Which suite to run: springs, transfer, memory, scene (collisions), or all.
     #[arg(long, default_value = "all")]
     suite: String,
     /// Directory of the real test meshes (defaults to $MORPHKIT_DATA when set).
@@ -225,6 +225,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if matches!(args.suite.as_str(), "memory") {
         report["memory"] = memory_suite()?;
     }
+    if matches!(args.suite.as_str(), "scene") {
+        report["scene"] = super::bench_scene::run_scene_bench(&bent_tube(18_000), 3)?;
+    }
     if matches!(args.suite.as_str(), "transfer" | "all") {
         match data.as_deref() {
             Some(dir) => report["transfer"] = super::bench_transfer::run_transfer_bench(dir)?,
@@ -233,10 +236,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     if !matches!(
         args.suite.as_str(),
-        "springs" | "transfer" | "memory" | "all"
+        "springs" | "transfer" | "memory" | "scene" | "all"
     ) {
         anyhow::bail!(
-            "unknown suite '{}': use springs, transfer, memory or all",
+            "unknown suite '{}': use springs, transfer, memory, scene or all",
             args.suite
         );
     }

@@ -1,10 +1,12 @@
 //! One module per subcommand: its clap arguments and its `run`.
 
 pub mod bench;
+pub mod bench_scene;
 pub mod bench_transfer;
 pub mod blend;
 pub mod convert;
 pub mod correspond;
 pub mod demo;
 pub mod info;
+pub mod scene;
 pub mod transfer;
