@@ -39,6 +39,7 @@
 pub mod geom;
 pub mod io;
 pub mod mesh;
+pub mod scene;
 pub mod sparse;
 pub mod springs;
 pub mod synth;

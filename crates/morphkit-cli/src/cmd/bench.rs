@@ -19,7 +19,7 @@ use std::time::Instant;
     after_help = "Examples:\n  morphkit bench\n  morphkit bench --data ../shared/data --report bench.json\n  morphkit bench --suite springs --steps 36\n  morphkit bench --suite synth --data ../shared/data"
 )]
 pub struct BenchArgs {
-    /// Which suite to run: springs, transfer, synth, or all.
+    /// Which suite to run: springs, transfer, memory, synth, scene (collisions), or all.
     #[arg(long, default_value = "all")]
     suite: String,
     /// Directory of the real test meshes (defaults to $MORPHKIT_DATA when set).
@@ -229,9 +229,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             args.steps
         );
     }
-    if !matches!(args.suite.as_str(), "springs" | "transfer" | "memory" | "synth" | "all") {
+    if !matches!(args.suite.as_str(), "springs" | "transfer" | "memory" | "synth" | "scene" | "all") {
         anyhow::bail!(
-            "unknown suite '{}': use springs, transfer, memory, synth or all",
+            "unknown suite '{}': use springs, transfer, memory, synth, scene or all",
             args.suite
         );
     }
@@ -245,6 +245,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     if matches!(args.suite.as_str(), "memory") {
         report["memory"] = memory_suite()?;
+    }
+    if matches!(args.suite.as_str(), "scene") {
+        report["scene"] = super::bench_scene::run_scene_bench(&bent_tube(18_000), 3)?;
     }
     if matches!(args.suite.as_str(), "transfer" | "all") {
         match data.as_deref() {

@@ -31,6 +31,7 @@ Examples:
   morphkit blend --base a.obj --target b.obj --target c.obj --weights 0.2,0.3,0.5 --convex --out mix.ply
   morphkit blend --base rest.obj --target bend.obj --weights-file keys.csv --fixed pinned.json --out anim.pc2
   morphkit blend --base rest.obj --target bend.obj --frames 36 --linear --out linear.glb
+  morphkit blend --scene examples/bend-around-cylinder/scene.toml --out wrap.glb --report wrap.json
 
 OUT: a directory (no extension) gets frame_0000.obj, …; .glb/.gltf gets an animation; .pc2 a
 point cache; .obj/.ply/.off a single mesh (one frame only). --fixed FILE.json holds
@@ -49,11 +50,15 @@ const MAX_FRAMES: usize = 100_000;
 #[derive(clap::Args, Debug)]
 #[command(after_help = EXAMPLES)]
 pub struct BlendArgs {
+    /// A TOML scene (base, targets, weights, obstacles, pulls; see `morphkit::scene::Scene`)
+    /// instead of --base/--target and the weight flags: the blend collides with the obstacles.
+    #[arg(long, conflicts_with_all = ["base", "targets", "w"])]
+    pub scene: Option<PathBuf>,
     /// The base shape (shape 0).
-    #[arg(long)]
-    pub base: PathBuf,
+    #[arg(long, required_unless_present = "scene")]
+    pub base: Option<PathBuf>,
     /// A target shape; repeat for several. All must share the base's connectivity.
-    #[arg(long = "target", required = true)]
+    #[arg(long = "target", required_unless_present = "scene")]
     pub targets: Vec<PathBuf>,
     /// Blend factor between the base and a single target.
     #[arg(long, group = "w")]
@@ -222,8 +227,14 @@ fn solve_frames(
 
 /// Runs `morphkit blend`.
 pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
+    if let Some(scene) = &a.scene {
+        return super::scene::run(scene, &a.out, a.report.as_deref());
+    }
     let start = Instant::now();
-    let mut inputs = vec![a.base.clone()];
+    let Some(base) = &a.base else {
+        bail!("give --base and --target, or --scene");
+    };
+    let mut inputs = vec![base.clone()];
     inputs.extend(a.targets.iter().cloned());
     let mut protected = inputs.clone();
     protected.extend(a.weights_file.iter().cloned());

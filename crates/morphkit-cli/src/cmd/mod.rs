@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod bench_synth;
+pub mod bench_scene;
 pub mod bench_transfer;
 pub mod blend;
 pub mod convert;
@@ -10,4 +11,5 @@ pub mod demo;
 pub mod flex;
 pub mod info;
 pub mod synth;
+pub mod scene;
 pub mod transfer;

@@ -34,7 +34,10 @@ pub use atomic::{canonical_path, check_not_input, write_atomic};
 pub use colors::{diverging, scalar_colors, viridis, Colors, NAN_GREY};
 pub use error::IoError;
 pub use format::Format;
-pub use gltf::{parse_gltf_morphs, read_gltf_morphs, write_gltf_morphs, GltfMorphs};
+pub use gltf::{
+    parse_gltf_morphs, read_gltf_morphs, write_gltf_morphs, write_gltf_scene, GltfMorphs,
+    GltfRigidMesh,
+};
 pub use ply::{write_ply_colored, PlyEncoding};
 pub use sequence::{
     frames_to_gltf, gltf_to_frames, obj_files, read_animation, read_shape_set, read_shape_set_with,

@@ -20,9 +20,11 @@ mod buffers;
 mod precheck;
 mod read;
 mod write;
+mod write_scene;
 
 pub use read::{parse_gltf_morphs, read_gltf_morphs};
 pub use write::write_gltf_morphs;
+pub use write_scene::{write_gltf_scene, GltfRigidMesh};
 
 use crate::mesh::{Point, TriMesh};
 

@@ -13,15 +13,15 @@ const UNSIGNED_INT: u32 = 5125;
 
 /// Buffer and accessor bookkeeping.
 #[derive(Default)]
-struct Builder {
-    bin: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
+pub(super) struct Builder {
+    pub(super) bin: Vec<u8>,
+    pub(super) views: Vec<Value>,
+    pub(super) accessors: Vec<Value>,
 }
 
 impl Builder {
     /// Appends `bytes` as a new 4-byte-aligned buffer view; returns its index.
-    fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
+    pub(super) fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
@@ -35,7 +35,7 @@ impl Builder {
     }
 
     /// A VEC3 f32 accessor with min/max; returns its index.
-    fn vec3(&mut self, p: &[[f32; 3]]) -> usize {
+    pub(super) fn vec3(&mut self, p: &[[f32; 3]]) -> usize {
         let mut lo = [f32::INFINITY; 3];
         let mut hi = [f32::NEG_INFINITY; 3];
         let mut bytes = Vec::with_capacity(12 * p.len());
@@ -55,7 +55,7 @@ impl Builder {
     }
 
     /// A SCALAR accessor of f32 or u32 values (with min/max when `bounds`).
-    fn scalars(
+    pub(super) fn scalars(
         &mut self,
         bytes: Vec<u8>,
         count: usize,
@@ -75,7 +75,7 @@ impl Builder {
     }
 }
 
-fn to_f32(
+pub(super) fn to_f32(
     path: &Path,
     what: &str,
     p: &[Point],
@@ -160,6 +160,13 @@ fn check(path: &Path, m: &GltfMorphs) -> Result<(), IoError> {
 
 /// Builds the JSON document and the binary buffer.
 fn build(path: &Path, m: &GltfMorphs) -> Result<(Value, Vec<u8>), IoError> {
+    let (doc, b) = build_with(path, m)?;
+    Ok(finish(doc, b))
+}
+
+/// The document and the builder before the buffer list is written, so that more nodes can be
+/// added ([`super::write_scene`]).
+pub(super) fn build_with(path: &Path, m: &GltfMorphs) -> Result<(Value, Builder), IoError> {
     check(path, m)?;
     let mut b = Builder::default();
     let base = to_f32(path, "base", &m.base.positions, None)?;
@@ -225,13 +232,18 @@ fn build(path: &Path, m: &GltfMorphs) -> Result<(Value, Vec<u8>), IoError> {
             "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}],
         }]);
     }
+    Ok((doc, b))
+}
+
+/// Pads the buffer and writes the buffer views, accessors and buffer into the document.
+pub(super) fn finish(mut doc: Value, mut b: Builder) -> (Value, Vec<u8>) {
     while !b.bin.len().is_multiple_of(4) {
         b.bin.push(0);
     }
     doc["bufferViews"] = Value::Array(b.views);
     doc["accessors"] = Value::Array(b.accessors);
     doc["buffers"] = json!([{"byteLength": b.bin.len()}]);
-    Ok((doc, b.bin))
+    (doc, b.bin)
 }
 
 /// Writes `m` to `path` atomically: GLB for `.glb`, otherwise glTF JSON with the buffer as a
@@ -241,7 +253,12 @@ fn build(path: &Path, m: &GltfMorphs) -> Result<(Value, Vec<u8>), IoError> {
 /// strictly increasing, coordinates that overflow `f32`, and the errors of
 /// [`crate::io::write_atomic`].
 pub fn write_gltf_morphs(path: &Path, m: &GltfMorphs) -> Result<(), IoError> {
-    let (mut doc, bin) = build(path, m)?;
+    let (doc, bin) = build(path, m)?;
+    write_document(path, doc, &bin)
+}
+
+/// Writes a finished document and its buffer as GLB (`.glb`) or glTF with a data URI.
+pub(super) fn write_document(path: &Path, mut doc: Value, bin: &[u8]) -> Result<(), IoError> {
     let glb = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
@@ -263,12 +280,12 @@ pub fn write_gltf_morphs(path: &Path, m: &GltfMorphs) -> Result<(), IoError> {
         out.extend_from_slice(&json);
         out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
         out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&bin);
+        out.extend_from_slice(bin);
         out
     } else {
         doc["buffers"][0]["uri"] = json!(format!(
             "data:application/octet-stream;base64,{}",
-            base64(&bin)
+            base64(bin)
         ));
         serde_json::to_vec_pretty(&doc).map_err(|e| IoError::content(path, e.to_string()))?
     };

@@ -1,0 +1,131 @@
+//! `morphkit blend --scene scene.toml`: a blend that collides with obstacles and follows pulled
+//! vertices (Ma et al. 2012, Sec. 4). The scene file format is documented in
+//! `morphkit::scene::Scene`; this file only runs it and writes the results.
+
+use crate::util::{progress, write_report};
+use anyhow::{bail, Context};
+use morphkit::io::{self, FramesOptions};
+use morphkit::mesh::ShapeSet;
+use morphkit::scene::Scene;
+use serde_json::json;
+use std::path::Path;
+use std::time::Instant;
+
+/// Runs the scene at `scene_path`, writing frames to `out` and an optional JSON report.
+pub fn run(scene_path: &Path, out: &Path, report: Option<&Path>) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let scene = Scene::load(scene_path)?;
+    let mut inputs = scene.inputs.clone();
+    inputs.push(scene_path.to_path_buf());
+    io::check_not_input(out, &inputs)?;
+    if let Some(r) = report {
+        io::check_not_input(r, &inputs)?;
+    }
+    let n = scene.weights.len();
+    let single = io::Format::from_path(out).is_some_and(|f| f.is_single_mesh());
+    if single && n != 1 {
+        bail!("{}: a single-mesh output holds one frame, but the scene has {n} frames; use a directory, .glb or .pc2", out.display());
+    }
+    let t_setup = Instant::now();
+    let mut solver = scene.build()?;
+    let setup_seconds = t_setup.elapsed().as_secs_f64();
+    let bar = progress(n as u64, "scene");
+    let mut frames = Vec::with_capacity(n);
+    let mut rows = Vec::with_capacity(n);
+    let mut unresolved = Vec::new();
+    let mut unconverged = Vec::new();
+    for (k, w) in scene.weights.iter().enumerate() {
+        let f = solver
+            .solve(k as f64, w)
+            .with_context(|| format!("frame {k}"))?;
+        if !f.collision.resolved {
+            unresolved.push(k);
+        }
+        if !f.solver.converged {
+            unconverged.push(k);
+        }
+        if f.positions.iter().flatten().any(|c| !c.is_finite()) {
+            bail!("frame {k}: the result has non-finite coordinates; nothing was written");
+        }
+        rows.push(json!({
+            "frame": k,
+            "collision": f.collision,
+            "solver": f.solver,
+            "contact_vertices": f.contacts.iter().map(|c| c.vertex).collect::<Vec<_>>(),
+        }));
+        frames.push((format!("frame_{k:04}"), f.positions));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    if !unresolved.is_empty() {
+        eprintln!(
+            "warning: {} of {n} frames still penetrate an obstacle by more than the tolerance after the allowed collision rounds (frames {:?}; see --report)",
+            unresolved.len(),
+            &unresolved[..unresolved.len().min(10)]
+        );
+    }
+    if !unconverged.is_empty() {
+        eprintln!(
+            "warning: {} of {n} frames did not converge (frames {:?}; see --report)",
+            unconverged.len(),
+            &unconverged[..unconverged.len().min(10)]
+        );
+    }
+    let out_set = ShapeSet::new(scene.shapes.base().clone(), frames)?;
+    let t_write = Instant::now();
+    match io::Format::from_path(out) {
+        Some(io::Format::Glb | io::Format::Gltf) => {
+            let tracks: Vec<_> = scene
+                .obstacles
+                .iter()
+                .map(|o| o.gltf_track(n, scene.fps))
+                .collect();
+            io::write_gltf_scene(out, &io::frames_to_gltf(&out_set, scene.fps), &tracks)?;
+        }
+        _ if single => io::write_mesh(out, &out_set.mesh(0))?,
+        _ => io::write_frames(
+            out,
+            &out_set,
+            &FramesOptions {
+                fps: scene.fps,
+                inputs: inputs.clone(),
+            },
+        )?,
+    }
+    let write_seconds = t_write.elapsed().as_secs_f64();
+    if let Some(r) = report {
+        let detection: f64 = rows
+            .iter()
+            .filter_map(|r| r["collision"]["detection_seconds"].as_f64())
+            .sum();
+        let solve: f64 = rows
+            .iter()
+            .filter_map(|r| r["collision"]["solve_seconds"].as_f64())
+            .sum();
+        let value = json!({
+            "command": "blend",
+            "method": "physical",
+            "scene": scene_path.display().to_string(),
+            "inputs": scene.inputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+            "output": out.display().to_string(),
+            "vertices": scene.shapes.num_vertices(),
+            "triangles": scene.shapes.triangles().len(),
+            "obstacles": scene.obstacles.iter().map(|o| o.name().to_string()).collect::<Vec<_>>(),
+            "pulls": scene.pulls.len(),
+            "penetration_tolerance": solver.tolerance(),
+            "unresolved_frames": unresolved,
+            "unconverged_frames": unconverged,
+            "timings": {
+                "setup_seconds": setup_seconds,
+                "detection_seconds": detection,
+                "solve_seconds": solve,
+                "write_seconds": write_seconds,
+                "total_seconds": start.elapsed().as_secs_f64(),
+            },
+            "frames": rows,
+        });
+        write_report(r, &value)?;
+    }
+    eprintln!("wrote {n} frame(s) to {}", out.display());
+    Ok(())
+}

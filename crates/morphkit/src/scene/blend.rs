@@ -1,0 +1,179 @@
+//! [`SceneBlend`]: a prefactored [`PhysicalBlend`] with obstacles and pulls, solving one frame
+//! at a time with the collision rounds of [`super::collide`]; [`blend_scene`] for one-off use.
+
+use super::collide::{solve_frame, Candidates, CollisionOptions, CollisionStats, Contact};
+use super::obstacle::Obstacle;
+use super::pulls::{Pull, PullKind};
+use super::SceneError;
+use crate::mesh::{bbox_diagonal, Point, ShapeSet};
+use crate::springs::{BlendOptions, FrameStats, PhysicalBlend, Weights};
+
+/// One blended frame of a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneFrame {
+    /// Vertex positions, `#V`.
+    pub positions: Vec<Point>,
+    /// Solver statistics of the last equilibrium solve of the frame.
+    pub solver: FrameStats,
+    /// The vertices held on obstacles, by vertex id.
+    pub contacts: Vec<Contact>,
+    /// Collision rounds, penetration and timings.
+    pub collision: CollisionStats,
+}
+
+/// Physical blendshapes interacting with a scene (Ma et al. 2012, Sec. 4): the springs, the
+/// constraints and the symbolic analysis are built once; each [`solve`](Self::solve) is one
+/// frame. Pulls and contacts only add diagonal blocks, so no frame needs a new analysis.
+#[derive(Debug)]
+pub struct SceneBlend {
+    solver: PhysicalBlend,
+    obstacles: Vec<Obstacle>,
+    pulls: Vec<Pull>,
+    options: CollisionOptions,
+    candidates: Candidates,
+    tolerance: f64,
+}
+
+impl std::fmt::Debug for Candidates {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Candidates")
+            .field("surface", &self.surface.len())
+            .finish()
+    }
+}
+
+impl SceneBlend {
+    /// Builds the physical blend and checks the pulls against it: each pulled vertex must
+    /// exist, must not be fixed, must lie on a component held by fixed vertices, and may be
+    /// pulled once.
+    pub fn new(
+        shapes: &ShapeSet,
+        blend: &BlendOptions,
+        obstacles: Vec<Obstacle>,
+        pulls: Vec<Pull>,
+        options: &CollisionOptions,
+    ) -> Result<Self, SceneError> {
+        if !(options.tolerance.is_finite() && options.tolerance > 0.0) {
+            return Err(crate::springs::BlendError::InvalidOption(format!(
+                "the collision tolerance must be finite and positive, got {}",
+                options.tolerance
+            ))
+            .into());
+        }
+        let solver = PhysicalBlend::new(shapes, blend)?;
+        let n = shapes.num_vertices();
+        let constraints = solver.constraints();
+        let mut fixed = vec![false; n];
+        for &v in &constraints.fixed {
+            fixed[v as usize] = true;
+        }
+        let mut gauged = vec![false; n];
+        for g in &constraints.gauges {
+            for &v in &g.vertices {
+                gauged[v as usize] = true;
+            }
+        }
+        let mut pulled = vec![None; n];
+        for (index, p) in pulls.iter().enumerate() {
+            let v = p.vertex() as usize;
+            let why = if v >= n {
+                Some(format!(
+                    "is out of range: the mesh has {n} vertices (ids are 0-based)"
+                ))
+            } else if fixed[v] {
+                Some("is a fixed vertex; a pull cannot move it".to_string())
+            } else if gauged[v] {
+                Some("lies on a component with no fixed vertices: fix at least 3 non-collinear vertices of it so that it has a place in the world to be pulled against".to_string())
+            } else {
+                pulled[v]
+                    .replace(index)
+                    .map(|other| format!("is already pulled by pull {other}"))
+            };
+            if let Some(why) = why {
+                return Err(SceneError::PullVertex {
+                    index,
+                    vertex: p.vertex(),
+                    why,
+                });
+            }
+        }
+        let mut on_surface = vec![false; n];
+        for t in shapes.triangles() {
+            for &v in t {
+                on_surface[v as usize] = true;
+            }
+        }
+        let surface: Vec<u32> = (0..n as u32).filter(|&v| on_surface[v as usize]).collect();
+        let movable = (0..n)
+            .map(|v| {
+                let hard_pull = pulled[v].is_some_and(|i| pulls[i].kind() == PullKind::Hard);
+                on_surface[v] && !fixed[v] && !gauged[v] && !hard_pull
+            })
+            .collect();
+        let tolerance = options.tolerance * bbox_diagonal(shapes.positions(0));
+        Ok(Self {
+            solver,
+            obstacles,
+            pulls,
+            options: options.clone(),
+            candidates: Candidates { surface, movable },
+            tolerance,
+        })
+    }
+
+    /// The frame at frame number `frame` (it places the obstacles and the pulls) with
+    /// `weights`. Frames do not depend on each other.
+    pub fn solve(&mut self, frame: f64, weights: &Weights) -> Result<SceneFrame, SceneError> {
+        let targets: Vec<_> = self.pulls.iter().map(|p| p.target_at(frame)).collect();
+        let placed: Vec<_> = self.obstacles.iter().map(|o| o.placed(frame)).collect();
+        let (result, contacts, collision) = solve_frame(
+            &mut self.solver,
+            weights,
+            &targets,
+            &placed,
+            &self.candidates,
+            &self.options,
+            self.tolerance,
+        )?;
+        Ok(SceneFrame {
+            positions: result.positions,
+            solver: result.stats,
+            contacts,
+            collision,
+        })
+    }
+
+    /// The underlying physical blend.
+    pub fn physical_blend(&mut self) -> &mut PhysicalBlend {
+        &mut self.solver
+    }
+    /// The obstacles.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
+    }
+    /// The pulls.
+    pub fn pulls(&self) -> &[Pull] {
+        &self.pulls
+    }
+    /// The absolute penetration tolerance.
+    pub fn tolerance(&self) -> f64 {
+        self.tolerance
+    }
+}
+
+/// One-shot scene blend: builds a [`SceneBlend`] and solves frame `k` with `weights[k]`.
+pub fn blend_scene(
+    shapes: &ShapeSet,
+    blend: &BlendOptions,
+    obstacles: Vec<Obstacle>,
+    pulls: Vec<Pull>,
+    options: &CollisionOptions,
+    weights: &[Weights],
+) -> Result<Vec<SceneFrame>, SceneError> {
+    let mut s = SceneBlend::new(shapes, blend, obstacles, pulls, options)?;
+    weights
+        .iter()
+        .enumerate()
+        .map(|(k, w)| s.solve(k as f64, w))
+        .collect()
+}
