@@ -79,7 +79,7 @@ fn check_options(o: &BlendOptions) -> Result<(), BlendError> {
     if !(o.min_rest_fraction > 0.0 && o.min_rest_fraction < 1.0) {
         return bad("min_rest_fraction", "in (0, 1)", o.min_rest_fraction);
     }
-    if !(o.kinematic_stretch > 1.0) {
+    if o.kinematic_stretch.is_nan() || o.kinematic_stretch <= 1.0 {
         return bad(
             "the kinematic stretch",
             "greater than 1 (or infinite)",

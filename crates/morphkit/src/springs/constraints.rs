@@ -228,8 +228,8 @@ fn explicit_here(explicit: bool, fixed_here: &[Point]) -> bool {
 
 /// Vertices of triangles whose in-plane stretch between the base and some shape exceeds
 /// `threshold`: $\max(\sigma_{\max}, 1/\sigma_{\min}) >$ `threshold`, with $\sigma$ the
-/// singular values of the triangle's 2D deformation (from the metric tensors $G_0 = E_0^	op E_0$,
-/// $G_s = E_s^	op E_s$ of the edge matrices). A triangle that is a sliver in the base and opens
+/// singular values of the triangle's 2D deformation (from the metric tensors $G_0 = E_0^\top E_0$,
+/// $G_s = E_s^\top E_s$ of the edge matrices). A triangle that is a sliver in the base and opens
 /// in a target (a closed slit) counts as infinitely stretched.
 pub fn stretched_vertices(shapes: &ShapeSet, threshold: f64) -> Vec<u32> {
     if !threshold.is_finite() {

@@ -135,7 +135,7 @@ pub(crate) fn trust_region(
     while !stats.converged && stats.newton_iterations < prob.options.max_newton_iterations {
         stats.newton_iterations += 1;
         let every = prob.options.refactor_every;
-        if refactor || (every > 0 && (stats.newton_iterations - 1) % every == 0) {
+        if refactor || (every > 0 && (stats.newton_iterations - 1).is_multiple_of(every)) {
             prob.hessian(ws, x, HessianKind::Projected, false);
             prob.factorize(ws, stats)?;
             refactor = false;
