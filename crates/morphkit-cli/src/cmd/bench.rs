@@ -17,7 +17,8 @@ use std::time::Instant;
     after_help = "Examples:\n  morphkit bench\n  morphkit bench --data ../shared/data --report bench.json\n  morphkit bench --suite springs --steps 36"
 )]
 pub struct BenchArgs {
-    /// Which suite to run: springs, transfer, or all.
+    /// Which suite to run: springs, transfer, memory, volume (internal springs), or all
+    /// (springs and transfer).
     #[arg(long, default_value = "all")]
     suite: String,
     /// Directory of the real test meshes (defaults to $MORPHKIT_DATA when set).
@@ -222,6 +223,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if matches!(args.suite.as_str(), "springs" | "all") {
         report["springs"] = json!(springs_suite(data.as_deref(), args.steps, args.threads)?);
     }
+    if matches!(args.suite.as_str(), "volume") {
+        report["volume"] = super::bench_volume::run_volume_bench(args.steps, args.threads)?;
+    }
     if matches!(args.suite.as_str(), "memory") {
         report["memory"] = memory_suite()?;
     }
@@ -233,10 +237,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     if !matches!(
         args.suite.as_str(),
-        "springs" | "transfer" | "memory" | "all"
+        "springs" | "transfer" | "memory" | "volume" | "all"
     ) {
         anyhow::bail!(
-            "unknown suite '{}': use springs, transfer, memory or all",
+            "unknown suite '{}': use springs, transfer, memory, volume or all",
             args.suite
         );
     }

@@ -2,9 +2,11 @@
 
 pub mod bench;
 pub mod bench_transfer;
+pub mod bench_volume;
 pub mod blend;
 pub mod convert;
 pub mod correspond;
 pub mod demo;
 pub mod info;
 pub mod transfer;
+pub mod volume;
