@@ -122,6 +122,14 @@ pub fn read_json(path: &Path, what: &str) -> anyhow::Result<serde_json::Value> {
         .map_err(|e| anyhow::anyhow!("{}: invalid JSON: {e}", path.display()))
 }
 
+/// Writes a JSON report atomically (temporary file, then rename). Subcommands that plan all
+/// their outputs up front use [`crate::outputs::Outputs::json`] instead.
+pub fn write_report(path: &std::path::Path, value: &serde_json::Value) -> anyhow::Result<()> {
+    let text = serde_json::to_string_pretty(value)?;
+    morphkit::io::write_atomic(path, text.as_bytes()).map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -156,12 +164,4 @@ mod tests {
         let e = check_fps(1e-300).unwrap_err().to_string();
         assert!(e.starts_with("--fps 1e-300: must be at least 0.001"), "{e}");
     }
-}
-
-/// Writes a JSON report atomically (temporary file, then rename). Subcommands that plan all
-/// their outputs up front use [`crate::outputs::Outputs::json`] instead.
-pub fn write_report(path: &std::path::Path, value: &serde_json::Value) -> anyhow::Result<()> {
-    let text = serde_json::to_string_pretty(value)?;
-    morphkit::io::write_atomic(path, text.as_bytes()).map_err(|e| anyhow::anyhow!("{e}"))?;
-    Ok(())
 }

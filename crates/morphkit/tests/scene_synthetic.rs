@@ -2,6 +2,8 @@
 //! never-touching obstacle change nothing, a pull with part of the boundary fixed (Fig. 5),
 //! a keyframed obstacle denting a static pose, and scene-file errors that name the key.
 
+mod common;
+
 use morphkit::mesh::{bbox_diagonal, generate, Point, ShapeSet, TriMesh};
 use morphkit::scene::{
     blend_scene, CollisionOptions, Obstacle, Primitive, Pull, PullKey, PullKind, RigidKey, Scene,
@@ -69,8 +71,16 @@ fn no_obstacle_and_a_never_touching_obstacle_give_the_plain_blend() {
     );
     let never = blend_scene(&shapes, &opts, vec![far], vec![], &Default::default(), &w).unwrap();
     for k in 0..w.len() {
-        assert_eq!(none[k].positions, expected[k], "frame {k}, no obstacle");
-        assert_eq!(never[k].positions, expected[k], "frame {k}, far obstacle");
+        common::assert_same_frame(
+            &none[k].positions,
+            &expected[k],
+            &format!("frame {k}, no obstacle"),
+        );
+        common::assert_same_frame(
+            &never[k].positions,
+            &expected[k],
+            &format!("frame {k}, far obstacle"),
+        );
         assert_eq!(never[k].collision.contacts, 0);
         assert_eq!(never[k].collision.rounds, 0);
         assert_eq!(never[k].collision.max_penetration, 0.0);

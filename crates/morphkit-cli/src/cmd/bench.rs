@@ -19,7 +19,8 @@ use std::time::Instant;
     after_help = "Examples:\n  morphkit bench\n  morphkit bench --data ../shared/data --report bench.json\n  morphkit bench --suite springs --steps 36\n  morphkit bench --suite synth --data ../shared/data"
 )]
 pub struct BenchArgs {
-    /// Which suite to run: springs, transfer, memory, synth, scene (collisions), or all.
+    /// Which suite to run: springs, transfer, memory, synth, scene (collisions), volume
+    /// (internal springs), or all (springs, transfer, synth).
     #[arg(long, default_value = "all")]
     suite: String,
     /// Directory of the real test meshes (defaults to $MORPHKIT_DATA when set).
@@ -229,9 +230,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             args.steps
         );
     }
-    if !matches!(args.suite.as_str(), "springs" | "transfer" | "memory" | "synth" | "scene" | "all") {
+    if !matches!(
+        args.suite.as_str(),
+        "springs" | "transfer" | "memory" | "synth" | "scene" | "volume" | "all"
+    ) {
         anyhow::bail!(
-            "unknown suite '{}': use springs, transfer, memory, synth, scene or all",
+            "unknown suite '{}': use springs, transfer, memory, synth, scene, volume or all",
             args.suite
         );
     }
@@ -242,6 +246,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let mut report = json!({ "threads": args.threads });
     if matches!(args.suite.as_str(), "springs" | "all") {
         report["springs"] = json!(springs_suite(data.as_deref(), args.steps, args.threads)?);
+    }
+    if matches!(args.suite.as_str(), "volume") {
+        report["volume"] = super::bench_volume::run_volume_bench(args.steps, args.threads)?;
     }
     if matches!(args.suite.as_str(), "memory") {
         report["memory"] = memory_suite()?;

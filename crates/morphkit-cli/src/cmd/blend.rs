@@ -120,6 +120,12 @@ pub struct BlendArgs {
     /// Replace the frame_*.obj files of an existing output directory.
     #[arg(long)]
     pub force: bool,
+    /// Rigid anchor (Ma et al. Sec. 3.4): `auto`, or `x,y,z[,size]` in base coordinates.
+    #[arg(long)]
+    pub anchor: Option<String>,
+    /// Interior for volume (Sec. 3.1): `none`, `lattice` or `tetgen`, optionally `,density`.
+    #[arg(long, default_value = "none")]
+    pub interior: String,
 }
 
 fn read_fixed(spec: &str) -> anyhow::Result<FixedVertices> {
@@ -184,7 +190,7 @@ fn frame_weights(a: &BlendArgs, n_shapes: usize) -> anyhow::Result<Vec<Weights>>
     bail!("give one of --alpha, --weights, --frames or --weights-file")
 }
 
-fn weights_json(w: &Weights) -> serde_json::Value {
+pub(super) fn weights_json(w: &Weights) -> serde_json::Value {
     match w {
         Weights::Alpha(a) => json!({ "alpha": a }),
         Weights::Convex(v) => json!({ "convex": v }),
@@ -193,7 +199,7 @@ fn weights_json(w: &Weights) -> serde_json::Value {
 }
 
 /// `OUT-unconverged.ply` beside `out`.
-fn unconverged_path(out: &Path) -> PathBuf {
+pub(super) fn unconverged_path(out: &Path) -> PathBuf {
     let stem = out
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -287,6 +293,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
         .clamp(1, 64);
+    if super::volume::requested(a) {
+        return super::volume::run(a, &shapes, &weights, &options, threads, start);
+    }
     if !a.linear {
         crate::util::announce_work("setting up the physical blend", shapes.num_vertices());
     }

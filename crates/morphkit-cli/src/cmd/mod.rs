@@ -1,15 +1,17 @@
 //! One module per subcommand: its clap arguments and its `run`.
 
 pub mod bench;
-pub mod bench_synth;
 pub mod bench_scene;
+pub mod bench_synth;
 pub mod bench_transfer;
+pub mod bench_volume;
 pub mod blend;
 pub mod convert;
 pub mod correspond;
 pub mod demo;
 pub mod flex;
 pub mod info;
-pub mod synth;
 pub mod scene;
+pub mod synth;
 pub mod transfer;
+pub mod volume;

@@ -123,6 +123,38 @@ impl SymmetricPattern {
     }
 }
 
+/// A zeroed `f64` buffer whose first element is 64-byte aligned, whatever the allocator
+/// returns. faer's SIMD kernels take different head/tail paths for different alignments, and
+/// so round differently: with every buffer aligned the same way, a factorization and a solve
+/// give the same bits in every process, thread and allocation state.
+#[derive(Debug)]
+struct Aligned {
+    storage: Vec<f64>,
+    offset: usize,
+    len: usize,
+}
+
+impl Aligned {
+    fn new(len: usize) -> Option<Self> {
+        let mut storage = Vec::new();
+        storage.try_reserve_exact(len + 8).ok()?;
+        storage.resize(len + 8, 0.0);
+        let addr = storage.as_ptr() as usize;
+        let offset = ((64 - addr % 64) % 64) / std::mem::size_of::<f64>();
+        Some(Self {
+            storage,
+            offset,
+            len,
+        })
+    }
+    fn as_slice(&self) -> &[f64] {
+        &self.storage[self.offset..self.offset + self.len]
+    }
+    fn as_mut_slice(&mut self) -> &mut [f64] {
+        &mut self.storage[self.offset..self.offset + self.len]
+    }
+}
+
 /// Fill-reducing ordering for the symbolic analysis.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub enum Ordering {
@@ -143,7 +175,9 @@ pub enum Ordering {
 pub struct Cholesky {
     pattern: Arc<SymmetricPattern>,
     symbolic: Arc<SymbolicCholesky<usize>>,
-    l_values: Vec<f64>,
+    l_values: Aligned,
+    /// Right-hand side of [`Cholesky::solve_one`], copied here so that its alignment is fixed.
+    rhs_scratch: Aligned,
     factor_scratch: MemBuffer,
     /// Scratch of single right-hand-side solves ([`Cholesky::solve_one`]).
     solve_scratch: MemBuffer,
@@ -154,7 +188,7 @@ impl std::fmt::Debug for Cholesky {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Cholesky")
             .field("n", &self.pattern.n())
-            .field("factor_nnz", &self.l_values.len())
+            .field("factor_nnz", &self.l_values.len)
             .finish()
     }
 }
@@ -216,11 +250,10 @@ impl Cholesky {
         symbolic: Arc<SymbolicCholesky<usize>>,
     ) -> Result<Self, SolveError> {
         let oom = |_| SolveError::Backend("out of memory".into());
-        let mut l_values = Vec::new();
-        l_values
-            .try_reserve_exact(symbolic.len_val())
-            .map_err(|_| SolveError::Backend("out of memory for the factor".into()))?;
-        l_values.resize(symbolic.len_val(), 0.0);
+        let l_values = Aligned::new(symbolic.len_val())
+            .ok_or_else(|| SolveError::Backend("out of memory for the factor".into()))?;
+        let rhs_scratch =
+            Aligned::new(pattern.n()).ok_or_else(|| SolveError::Backend("out of memory".into()))?;
         let req = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
         let factor_scratch = MemBuffer::try_new(req).map_err(oom)?;
         let req = symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);
@@ -229,6 +262,7 @@ impl Cholesky {
             pattern,
             symbolic,
             l_values,
+            rhs_scratch,
             factor_scratch,
             solve_scratch,
             factored: false,
@@ -254,15 +288,18 @@ impl Cholesky {
     /// Solves $A x = b$ in place for one right-hand side, with no allocation.
     pub fn solve_one(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
         self.check_rhs(rhs, 1)?;
-        let llt = LltRef::new(&self.symbolic, &self.l_values);
+        let llt = LltRef::new(&self.symbolic, self.l_values.as_slice());
         let n = self.pattern.n();
-        let mat = MatMut::from_column_major_slice_mut(rhs, n, 1);
+        let work = self.rhs_scratch.as_mut_slice();
+        work.copy_from_slice(rhs);
+        let mat = MatMut::from_column_major_slice_mut(work, n, 1);
         llt.solve_in_place_with_conj(
             Conj::No,
             mat,
             Par::Seq,
             MemStack::new(&mut self.solve_scratch),
         );
+        rhs.copy_from_slice(work);
         Ok(())
     }
 
@@ -295,7 +332,7 @@ impl Cholesky {
 
     /// Number of stored entries of the factor $L$ (a measure of fill and memory).
     pub fn factor_nnz(&self) -> usize {
-        self.l_values.len()
+        self.l_values.len
     }
 
     /// Numeric factorization of the matrix with the given lower-triangle `values` (one per
@@ -316,7 +353,7 @@ impl Cholesky {
         }
         let a = SparseColMatRef::new(self.pattern.symbolic(), values);
         let res = self.symbolic.factorize_numeric_llt::<f64>(
-            &mut self.l_values,
+            self.l_values.as_mut_slice(),
             a,
             Side::Lower,
             Default::default(),
@@ -346,9 +383,13 @@ impl Cholesky {
         let req = self.symbolic.solve_in_place_scratch::<f64>(ncols, Par::Seq);
         let mut buf =
             MemBuffer::try_new(req).map_err(|_| SolveError::Backend("out of memory".into()))?;
-        let llt = LltRef::new(&self.symbolic, &self.l_values);
-        let mat = MatMut::from_column_major_slice_mut(rhs, n, ncols);
+        let llt = LltRef::new(&self.symbolic, self.l_values.as_slice());
+        let mut work =
+            Aligned::new(rhs.len()).ok_or_else(|| SolveError::Backend("out of memory".into()))?;
+        work.as_mut_slice().copy_from_slice(rhs);
+        let mat = MatMut::from_column_major_slice_mut(work.as_mut_slice(), n, ncols);
         llt.solve_in_place_with_conj(Conj::No, mat, Par::Seq, MemStack::new(&mut buf));
+        rhs.copy_from_slice(work.as_slice());
         Ok(())
     }
 

@@ -55,6 +55,7 @@
 
 mod blender;
 mod constraints;
+pub mod interior;
 pub mod metrics;
 mod newton;
 mod options;
@@ -68,6 +69,9 @@ pub mod weights;
 
 pub use blender::{blend, PhysicalBlend};
 pub use constraints::{stretched_vertices, Components, Constraints, FixedVertices, Gauge};
+pub use interior::{
+    AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions, VolumetricBlend,
+};
 pub use metrics::{blend_metrics, fold_metrics, linear_blend, BlendMetrics, FoldMetrics};
 pub use options::{
     BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, Predictor, RigSummary,

@@ -9,6 +9,10 @@ pub enum SpringKind {
     Structure,
     /// Between vertices at graph distance exactly 2: bending and curvature.
     Bending,
+    /// Inside a closed surface, or from the surface to an interior vertex: volume (Sec. 3.1).
+    Internal,
+    /// The anchor's own edges and its ties to the body (Sec. 3.4, step 2).
+    Anchor,
 }
 
 /// How spring stiffness depends on rest length.
@@ -119,9 +123,46 @@ impl SpringSet {
         let scale = springs
             .iter()
             .map(|s| match s.kind {
-                SpringKind::Structure => options.k0,
                 SpringKind::Bending => options.k0 * options.bending_scale,
+                _ => options.k0,
             })
+            .collect();
+        Self {
+            springs,
+            rest,
+            scale,
+            options: options.clone(),
+            dropped,
+        }
+    }
+
+    /// Springs between explicit vertex pairs (internal and anchor springs, Sec. 3.1 and 3.4),
+    /// measured in every shape of `shapes`; `scale[q]` is spring `q`'s stiffness multiplier
+    /// ($k_q = $ `scale[q]` $/ \bar r_q$ under the paper's rule, Sec. 3.5). Pairs are stored
+    /// with `i < j`; pairs whose vertices coincide in every shape are left out and counted,
+    /// as in [`new`](Self::new). `options` gives the stiffness rule.
+    pub fn from_pairs(shapes: &ShapeSet, pairs: &[(Spring, f64)], options: &SpringOptions) -> Self {
+        let eps = 1e-12 * crate::mesh::bbox_diagonal(shapes.positions(0)).max(f64::MIN_POSITIVE);
+        let mut springs = Vec::with_capacity(pairs.len());
+        let mut scale = Vec::with_capacity(pairs.len());
+        let mut dropped = 0;
+        for &(s, k) in pairs {
+            let (i, j) = (s.i.min(s.j), s.i.max(s.j));
+            let long = shapes
+                .all_positions()
+                .iter()
+                .any(|p| norm(sub(p[i as usize], p[j as usize])) > eps);
+            if i == j || !long {
+                dropped += 1;
+                continue;
+            }
+            springs.push(Spring { i, j, kind: s.kind });
+            scale.push(k);
+        }
+        let rest = shapes
+            .all_positions()
+            .iter()
+            .map(|p| lengths(&springs, p))
             .collect();
         Self {
             springs,

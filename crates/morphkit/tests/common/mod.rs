@@ -31,3 +31,29 @@ pub fn data_file(rel: &str) -> Option<PathBuf> {
 pub fn skip(test: &str) {
     eprintln!("{test}: MORPHKIT_DATA is unset; skipping the real-data test");
 }
+
+/// Asserts that two solves of the same frame agree to round-off: within `1e-12` of the
+/// bounding-box diagonal. (Solves in one process can still differ in the last bits, because
+/// faer's SIMD kernels take alignment-dependent paths through internal scratch buffers.)
+pub fn assert_same_frame(a: &[[f64; 3]], b: &[[f64; 3]], what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}: vertex counts differ");
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in b {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let diag = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt();
+    let worst = a
+        .iter()
+        .zip(b)
+        .map(|(p, q)| {
+            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+        })
+        .fold(0.0, f64::max);
+    assert!(
+        worst <= 1e-12 * diag.max(f64::MIN_POSITIVE),
+        "{what}: frames differ by {worst:e} (diagonal {diag:e})"
+    );
+}

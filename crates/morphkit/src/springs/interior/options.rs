@@ -1,0 +1,146 @@
+//! Options of the interior and of the anchor.
+
+use crate::mesh::Point;
+
+/// Which interior to build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum InteriorMode {
+    /// No interior vertices: surface springs only (the default; the blend of earlier versions).
+    #[default]
+    None,
+    /// A body-centred cubic lattice inside each closed component (pure Rust).
+    Lattice,
+    /// A constrained Delaunay tetrahedralization by an external `tetgen` program (the paper's
+    /// choice; AGPL, so never linked). Not built in this version: asking for it is an error
+    /// naming the reason.
+    Tetgen,
+}
+
+/// How interior points and internal springs are made (Ma et al. Sec. 3.1).
+#[derive(Clone, Debug, PartialEq)]
+pub struct InteriorOptions {
+    /// Which interior. Default [`InteriorMode::None`].
+    pub mode: InteriorMode,
+    /// Lattice density: the lattice spacing is $h = 2 \bar e / \text{density}$ with $\bar e$
+    /// the component's mean surface edge length in the base. Default `1.0` (spacing two
+    /// mean edges, so the interior has a few times fewer vertices than the surface of a
+    /// compact shape); `2.0` halves the spacing (8× the interior points).
+    pub density: f64,
+    /// Interior points closer than `margin · h` to the surface are left out, so that no
+    /// internal spring is a sliver against the surface. Default `0.35`.
+    pub margin: f64,
+    /// Each surface vertex is tied to at most this many nearest interior points. Default `4`.
+    pub ties_per_vertex: usize,
+    /// …within `tie_radius · h`; ties whose segment leaves the solid are dropped. Default `2.0`.
+    pub tie_radius: f64,
+    /// Stiffness multiplier of internal springs relative to $k_0$. Default `1.0` (the paper
+    /// uses one $k_0$ for every spring).
+    pub stiffness: f64,
+}
+
+impl Default for InteriorOptions {
+    fn default() -> Self {
+        Self {
+            mode: InteriorMode::None,
+            density: 1.0,
+            margin: 0.35,
+            ties_per_vertex: 4,
+            tie_radius: 2.0,
+            stiffness: 1.0,
+        }
+    }
+}
+
+/// Where the anchor goes.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum AnchorPlacement {
+    /// No anchor (the default).
+    #[default]
+    None,
+    /// In the largest closed component: at its volume centroid when that lies inside at
+    /// least half as deep as the component's deepest point (on a 24³ grid), else at that
+    /// deepest point (nearest the centroid among equals); the cube's edge is half the
+    /// clearance to the surface, at most 5% of the bounding-box diagonal. Open meshes: at the
+    /// vertex centroid, edge 2% of the diagonal.
+    Auto,
+    /// At `center` with edge length `size` (`None`: as for `Auto`).
+    At {
+        /// Centre of the anchor, in base coordinates.
+        center: Point,
+        /// Edge length of the anchor cube.
+        size: Option<f64>,
+    },
+}
+
+/// The rigid anchor of Ma et al. Sec. 3.4: a small cube of 8 vertices inside the base whose
+/// own edges are very stiff and whose vertices are the boundary conditions of the blend.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AnchorOptions {
+    /// Where. Default [`AnchorPlacement::None`].
+    pub placement: AnchorPlacement,
+    /// Stiffness multiplier of the anchor's own edges relative to $k_0$ ("a very large spring
+    /// constant", step 2). Default `1000`.
+    pub stiffness: f64,
+    /// Each anchor vertex is tied to this many nearest body vertices (interior points where
+    /// there are any, else surface vertices) at stiffness $k_0$. Default `8`.
+    pub ties_per_vertex: usize,
+}
+
+impl Default for AnchorOptions {
+    fn default() -> Self {
+        Self {
+            placement: AnchorPlacement::None,
+            stiffness: 1000.0,
+            ties_per_vertex: 8,
+        }
+    }
+}
+
+impl InteriorOptions {
+    pub(crate) fn check(&self) -> Result<(), super::InteriorError> {
+        let bad = |what: &str, v: f64| {
+            Err(super::InteriorError::InvalidOption(format!(
+                "{what} must be finite and positive, got {v}"
+            )))
+        };
+        if !(self.density.is_finite() && self.density > 0.0) {
+            return bad("the lattice density", self.density);
+        }
+        if !(self.margin.is_finite() && self.margin >= 0.0) {
+            return bad("the margin", self.margin);
+        }
+        if !(self.tie_radius.is_finite() && self.tie_radius > 0.0) {
+            return bad("the tie radius", self.tie_radius);
+        }
+        if !(self.stiffness.is_finite() && self.stiffness > 0.0) {
+            return bad("the internal stiffness", self.stiffness);
+        }
+        Ok(())
+    }
+}
+
+impl AnchorOptions {
+    pub(crate) fn check(&self) -> Result<(), super::InteriorError> {
+        if !(self.stiffness.is_finite() && self.stiffness > 0.0) {
+            return Err(super::InteriorError::InvalidOption(format!(
+                "the anchor stiffness must be finite and positive, got {}",
+                self.stiffness
+            )));
+        }
+        if let AnchorPlacement::At { center, size } = &self.placement {
+            if center.iter().any(|c| !c.is_finite())
+                || size.is_some_and(|s| !(s.is_finite() && s > 0.0))
+            {
+                return Err(super::InteriorError::InvalidOption(format!(
+                    "the anchor needs a finite centre and a finite positive size, got {center:?}, {size:?}"
+                )));
+            }
+        }
+        if self.ties_per_vertex == 0 {
+            return Err(super::InteriorError::InvalidOption(
+                "the anchor needs at least one tie per vertex".into(),
+            ));
+        }
+        Ok(())
+    }
+}
