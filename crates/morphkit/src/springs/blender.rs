@@ -309,7 +309,7 @@ impl PhysicalBlend {
 
     /// Solves every weight vector, spread over up to `threads` threads (each with its own
     /// numeric workspace; the symbolic analysis is shared). Results come back in input order
-    /// and are bit-for-bit those of [`solve`](Self::solve), whatever the thread count.
+    /// and equal those of [`solve`](Self::solve) to round-off, whatever the thread count.
     pub fn solve_many(
         &mut self,
         weights: &[Weights],
