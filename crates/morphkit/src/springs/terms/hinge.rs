@@ -365,7 +365,7 @@ impl EnergyTerm for HingeTerm {
 
 #[cfg(test)]
 mod tests {
-    use super::super::check::{dense_hessian, gradient_error};
+    use super::super::check::{dense_hessian, gradient_error, hessian_error};
     use super::*;
     use crate::mesh::generate;
     use rand::{Rng, SeedableRng};
@@ -418,21 +418,7 @@ mod tests {
         assert!(err < 1e-7 * gmax.max(1.0), "FD error {err}, |g| {gmax}");
         let exact = dense_hessian(&term, &p, &x, HessianKind::Exact);
         // The exact Hessian matches differences of the gradient.
-        let n = x.len();
-        let (mut gp, mut gm) = (vec![0.0; n], vec![0.0; n]);
-        let mut worst: f64 = 0.0;
-        for k in 0..n {
-            let (mut xp, mut xm) = (x.clone(), x.clone());
-            xp[k] += 1e-6;
-            xm[k] -= 1e-6;
-            gp.iter_mut().for_each(|v| *v = 0.0);
-            gm.iter_mut().for_each(|v| *v = 0.0);
-            term.add_gradient(&p, &xp, &mut gp);
-            term.add_gradient(&p, &xm, &mut gm);
-            for r in 0..n {
-                worst = worst.max(((gp[r] - gm[r]) / 2e-6 - exact[r][k]).abs());
-            }
-        }
+        let worst = hessian_error(&term, &p, &x, &exact);
         let scale = exact.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
         assert!(
             worst < 1e-5 * scale,

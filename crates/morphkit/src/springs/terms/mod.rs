@@ -236,6 +236,31 @@ pub(crate) mod check {
         (worst, g.iter().fold(0.0f64, |m, v| m.max(v.abs())))
     }
 
+    /// Max abs difference between `hessian` (dense) and central differences of the gradient.
+    pub fn hessian_error(
+        t: &dyn EnergyTerm,
+        p: &TermParameters,
+        x: &[f64],
+        hessian: &[Vec<f64>],
+    ) -> f64 {
+        let n = x.len();
+        let (mut gp, mut gm) = (vec![0.0; n], vec![0.0; n]);
+        let mut worst: f64 = 0.0;
+        for k in 0..n {
+            let (mut xp, mut xm) = (x.to_vec(), x.to_vec());
+            xp[k] += 1e-6;
+            xm[k] -= 1e-6;
+            gp.iter_mut().for_each(|v| *v = 0.0);
+            gm.iter_mut().for_each(|v| *v = 0.0);
+            t.add_gradient(p, &xp, &mut gp);
+            t.add_gradient(p, &xm, &mut gm);
+            for r in 0..n {
+                worst = worst.max(((gp[r] - gm[r]) / 2e-6 - hessian[r][k]).abs());
+            }
+        }
+        worst
+    }
+
     /// Dense Hessian of `t` from its blocks.
     pub fn dense_hessian(
         t: &dyn EnergyTerm,

@@ -178,7 +178,7 @@ impl EnergyTerm for SpringTerm {
 
 #[cfg(test)]
 mod tests {
-    use super::super::check::{dense_hessian, gradient_error};
+    use super::super::check::{dense_hessian, gradient_error, hessian_error};
     use super::*;
     use crate::mesh::{generate, ShapeSet, Topology};
     use crate::springs::SpringOptions;
@@ -223,21 +223,7 @@ mod tests {
         }
         let (term, p, x) = setup(StiffnessRule::InverseRestLength);
         let hm = dense_hessian(&term, &p, &x, HessianKind::Exact);
-        let n = x.len();
-        let (mut gp, mut gm) = (vec![0.0; n], vec![0.0; n]);
-        let mut worst: f64 = 0.0;
-        for k in 0..n {
-            let (mut xp, mut xm) = (x.clone(), x.clone());
-            xp[k] += 1e-6;
-            xm[k] -= 1e-6;
-            gp.iter_mut().for_each(|v| *v = 0.0);
-            gm.iter_mut().for_each(|v| *v = 0.0);
-            term.add_gradient(&p, &xp, &mut gp);
-            term.add_gradient(&p, &xm, &mut gm);
-            for r in 0..n {
-                worst = worst.max(((gp[r] - gm[r]) / 2e-6 - hm[r][k]).abs());
-            }
-        }
+        let worst = hessian_error(&term, &p, &x, &hm);
         assert!(worst < 1e-6, "Hessian FD error {worst}");
     }
 
