@@ -254,3 +254,29 @@ fn a_position_accessor_that_does_not_exist_is_an_error() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Found by `cargo fuzz` (target `gltf`): an animation channel with an unknown target path
+/// made the `gltf` crate unwrap an invalid value.
+#[test]
+fn an_unknown_animation_path_is_not_a_panic() {
+    let d = tmp_dir("gltf-path");
+    let frames = d.join("a.gltf");
+    let set = morphkit::ShapeSet::new(
+        quad(),
+        vec![
+            ("a".into(), quad().positions),
+            ("b".into(), quad().positions),
+        ],
+    )
+    .unwrap();
+    io::write_frames(&frames, &set, &Default::default()).unwrap();
+    let text = std::fs::read_to_string(&frames).unwrap();
+    assert!(text.contains("\"weights\""));
+    std::fs::write(&frames, text.replace("\"weights\"", "\"igewhts\"")).unwrap();
+    // Either an error naming the file or the rig without its animation; never a panic.
+    match io::read_gltf_morphs(&frames) {
+        Ok(rig) => assert!(rig.weight_keys.is_empty()),
+        Err(e) => assert!(e.to_string().contains("a.gltf"), "{e}"),
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

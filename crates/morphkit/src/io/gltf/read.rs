@@ -8,6 +8,7 @@ use crate::mesh::{Point, Polygons, TriMesh};
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::animation::util::ReadOutputs;
 use ::gltf::animation::{Interpolation, Property};
+use ::gltf::json::validation::Checked;
 use ::gltf::mesh::Mode;
 use ::gltf::Semantic;
 use std::path::Path;
@@ -310,7 +311,12 @@ fn weight_keys<'a, 's>(
     for anim in doc.animations() {
         for ch in anim.channels() {
             let target = ch.target();
-            if target.property() != Property::MorphTargetWeights
+            // Read the raw JSON: `property()` and `node()` unwrap values that the `gltf`
+            // crate's validation lets through (an unknown path panicked; found by cargo fuzz).
+            let aj = &doc.as_json().animations[anim.index()];
+            let tj = &aj.channels[ch.index()].target;
+            if tj.path != Checked::Valid(Property::MorphTargetWeights)
+                || tj.node.value() >= doc.nodes().len()
                 || target.node().mesh().map(|m| m.index()) != Some(mesh)
             {
                 continue;
@@ -330,7 +336,12 @@ fn weight_keys<'a, 's>(
                 return Err(at("the output accessor has no weight data".into()));
             };
             let w: Vec<f32> = w.into_f32().collect();
-            let per_key = if ch.sampler().interpolation() == Interpolation::CubicSpline {
+            let sampler = aj.samplers.get(aj.channels[ch.index()].sampler.value());
+            let interpolation = match sampler.map(|s| s.interpolation) {
+                Some(Checked::Valid(i)) => i,
+                _ => return Err(at("the sampler's interpolation is not valid".into())),
+            };
+            let per_key = if interpolation == Interpolation::CubicSpline {
                 3 * num_targets
             } else {
                 num_targets
