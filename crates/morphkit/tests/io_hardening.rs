@@ -280,3 +280,26 @@ fn an_unknown_animation_path_is_not_a_panic() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Found by `cargo fuzz` (target `gltf`): an accessor with count 0 made the `gltf` crate's
+/// reader compute `count - 1`, which overflows.
+#[test]
+fn an_empty_accessor_is_an_error() {
+    let d = tmp_dir("gltf-count");
+    let g = d.join("x.gltf");
+    io::write_gltf_morphs(
+        &g,
+        &GltfMorphs {
+            base: quad(),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&g).unwrap()).unwrap();
+    doc["accessors"][1]["count"] = 0.into();
+    std::fs::write(&g, doc.to_string()).unwrap();
+    let e = err(&g);
+    assert!(e.contains("accessor 1 has count 0"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -133,6 +133,17 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
     // The file's bytes are no longer needed: the BIN chunk was copied into the blob.
     drop(bytes);
     let buffers = load_buffers(path, &gltf.document, gltf.blob.take())?;
+    // glTF requires count ≥ 1; the gltf crate's readers compute `count - 1` unchecked (an
+    // overflow found by cargo fuzz).
+    if let Some(a) = gltf.document.accessors().find(|a| a.count() == 0) {
+        return Err(IoError::content(
+            path,
+            format!(
+                "accessor {} has count 0; glTF requires at least 1",
+                a.index()
+            ),
+        ));
+    }
     let get = |b: ::gltf::Buffer| buffers.get(b.index()).map(|d| &d[..]);
     let doc = &gltf.document;
     let mesh = doc
