@@ -301,5 +301,11 @@ fn an_empty_accessor_is_an_error() {
     std::fs::write(&g, doc.to_string()).unwrap();
     let e = err(&g);
     assert!(e.contains("accessor 1 has count 0"), "{e}");
+    // Found by cargo fuzz: float indices reached an unreachable!() in the gltf crate.
+    doc["accessors"][1]["count"] = 6.into();
+    doc["accessors"][1]["componentType"] = 5126.into();
+    std::fs::write(&g, doc.to_string()).unwrap();
+    let e = err(&g);
+    assert!(e.contains("expected an unsigned integer type"), "{e}");
     let _ = std::fs::remove_dir_all(&d);
 }

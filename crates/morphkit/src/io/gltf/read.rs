@@ -189,6 +189,19 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
             )));
         }
         let offset = positions.len() as u32;
+        // The gltf crate's index reader panics (unreachable!) on other component types.
+        if let Some(acc) = prim.indices() {
+            if !matches!(
+                acc.data_type(),
+                DataType::U8 | DataType::U16 | DataType::U32
+            ) {
+                return Err(at(format!(
+                    "index accessor {} is {:?}, expected an unsigned integer type",
+                    acc.index(),
+                    acc.data_type()
+                )));
+            }
+        }
         let idx: Vec<u32> = match reader.read_indices() {
             Some(r) => r.into_u32().collect(),
             None => (0..n as u32).collect(),
