@@ -254,3 +254,58 @@ fn a_position_accessor_that_does_not_exist_is_an_error() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Found by `cargo fuzz` (target `gltf`): an animation channel with an unknown target path
+/// made the `gltf` crate unwrap an invalid value.
+#[test]
+fn an_unknown_animation_path_is_not_a_panic() {
+    let d = tmp_dir("gltf-path");
+    let frames = d.join("a.gltf");
+    let set = morphkit::ShapeSet::new(
+        quad(),
+        vec![
+            ("a".into(), quad().positions),
+            ("b".into(), quad().positions),
+        ],
+    )
+    .unwrap();
+    io::write_frames(&frames, &set, &Default::default()).unwrap();
+    let text = std::fs::read_to_string(&frames).unwrap();
+    assert!(text.contains("\"weights\""));
+    std::fs::write(&frames, text.replace("\"weights\"", "\"igewhts\"")).unwrap();
+    // Either an error naming the file or the rig without its animation; never a panic.
+    match io::read_gltf_morphs(&frames) {
+        Ok(rig) => assert!(rig.weight_keys.is_empty()),
+        Err(e) => assert!(e.to_string().contains("a.gltf"), "{e}"),
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Found by `cargo fuzz` (target `gltf`): an accessor with count 0 made the `gltf` crate's
+/// reader compute `count - 1`, which overflows.
+#[test]
+fn an_empty_accessor_is_an_error() {
+    let d = tmp_dir("gltf-count");
+    let g = d.join("x.gltf");
+    io::write_gltf_morphs(
+        &g,
+        &GltfMorphs {
+            base: quad(),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&g).unwrap()).unwrap();
+    doc["accessors"][1]["count"] = 0.into();
+    std::fs::write(&g, doc.to_string()).unwrap();
+    let e = err(&g);
+    assert!(e.contains("accessor 1 has count 0"), "{e}");
+    // Found by cargo fuzz: float indices reached an unreachable!() in the gltf crate.
+    doc["accessors"][1]["count"] = 6.into();
+    doc["accessors"][1]["componentType"] = 5126.into();
+    std::fs::write(&g, doc.to_string()).unwrap();
+    let e = err(&g);
+    assert!(e.contains("expected an unsigned integer type"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -8,6 +8,7 @@ use crate::mesh::{Point, Polygons, TriMesh};
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::animation::util::ReadOutputs;
 use ::gltf::animation::{Interpolation, Property};
+use ::gltf::json::validation::Checked;
 use ::gltf::mesh::Mode;
 use ::gltf::Semantic;
 use std::path::Path;
@@ -132,6 +133,17 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
     // The file's bytes are no longer needed: the BIN chunk was copied into the blob.
     drop(bytes);
     let buffers = load_buffers(path, &gltf.document, gltf.blob.take())?;
+    // glTF requires count ≥ 1; the gltf crate's readers compute `count - 1` unchecked (an
+    // overflow found by cargo fuzz).
+    if let Some(a) = gltf.document.accessors().find(|a| a.count() == 0) {
+        return Err(IoError::content(
+            path,
+            format!(
+                "accessor {} has count 0; glTF requires at least 1",
+                a.index()
+            ),
+        ));
+    }
     let get = |b: ::gltf::Buffer| buffers.get(b.index()).map(|d| &d[..]);
     let doc = &gltf.document;
     let mesh = doc
@@ -177,6 +189,19 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
             )));
         }
         let offset = positions.len() as u32;
+        // The gltf crate's index reader panics (unreachable!) on other component types.
+        if let Some(acc) = prim.indices() {
+            if !matches!(
+                acc.data_type(),
+                DataType::U8 | DataType::U16 | DataType::U32
+            ) {
+                return Err(at(format!(
+                    "index accessor {} is {:?}, expected an unsigned integer type",
+                    acc.index(),
+                    acc.data_type()
+                )));
+            }
+        }
         let idx: Vec<u32> = match reader.read_indices() {
             Some(r) => r.into_u32().collect(),
             None => (0..n as u32).collect(),
@@ -310,7 +335,12 @@ fn weight_keys<'a, 's>(
     for anim in doc.animations() {
         for ch in anim.channels() {
             let target = ch.target();
-            if target.property() != Property::MorphTargetWeights
+            // Read the raw JSON: `property()` and `node()` unwrap values that the `gltf`
+            // crate's validation lets through (an unknown path panicked; found by cargo fuzz).
+            let aj = &doc.as_json().animations[anim.index()];
+            let tj = &aj.channels[ch.index()].target;
+            if tj.path != Checked::Valid(Property::MorphTargetWeights)
+                || tj.node.value() >= doc.nodes().len()
                 || target.node().mesh().map(|m| m.index()) != Some(mesh)
             {
                 continue;
@@ -330,7 +360,12 @@ fn weight_keys<'a, 's>(
                 return Err(at("the output accessor has no weight data".into()));
             };
             let w: Vec<f32> = w.into_f32().collect();
-            let per_key = if ch.sampler().interpolation() == Interpolation::CubicSpline {
+            let sampler = aj.samplers.get(aj.channels[ch.index()].sampler.value());
+            let interpolation = match sampler.map(|s| s.interpolation) {
+                Some(Checked::Valid(i)) => i,
+                _ => return Err(at("the sampler's interpolation is not valid".into())),
+            };
+            let per_key = if interpolation == Interpolation::CubicSpline {
                 3 * num_targets
             } else {
                 num_targets
