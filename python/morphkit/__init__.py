@@ -1,0 +1,47 @@
+"""morphkit: physically plausible, reusable mesh animation.
+
+A thin Python client of the morphkit Rust library. Arrays follow libigl's conventions:
+vertices ``V`` as ``(n, 3) float64``, triangles ``F`` as ``(m, 3)`` integers, animations as
+``(k, n, 3) float64``. Errors are :class:`MorphkitError` (a :class:`ValueError`); file errors
+are also :class:`OSError`. Solves release the GIL.
+
+>>> import morphkit
+>>> V0, F = morphkit.read("rest.obj")
+>>> V1, _ = morphkit.read("bend.obj")
+>>> blend = morphkit.PhysicalBlend(V0, [V1], F)
+>>> half = blend.solve(0.5)
+"""
+
+from ._errors import BlendError, FileError, MeshError, MorphkitError, TransferError
+from ._morphkit import (
+    Correspondence,
+    PhysicalBlend,
+    Transfer,
+    __version__,
+    metrics,
+    read,
+    read_animation,
+    read_morphs,
+    write,
+    write_animation,
+    write_morphs,
+)
+
+__all__ = [
+    "BlendError",
+    "Correspondence",
+    "FileError",
+    "MeshError",
+    "MorphkitError",
+    "PhysicalBlend",
+    "Transfer",
+    "TransferError",
+    "__version__",
+    "metrics",
+    "read",
+    "read_animation",
+    "read_morphs",
+    "write",
+    "write_animation",
+    "write_morphs",
+]

@@ -1,0 +1,107 @@
+"""Type stubs of the compiled module (see the docstrings for details)."""
+
+import os
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+PathLike = Union[str, os.PathLike]
+Vertices = npt.NDArray[np.float64]  # (n, 3)
+Faces = npt.NDArray[np.int64]  # (m, 3)
+Frames = npt.NDArray[np.float64]  # (k, n, 3)
+ArrayLike = npt.ArrayLike
+
+def read(path: PathLike) -> Tuple[Vertices, Faces]: ...
+def write(path: PathLike, v: ArrayLike, f: ArrayLike) -> None: ...
+def read_morphs(path: PathLike) -> Tuple[Vertices, Faces, Frames, List[str]]: ...
+def write_morphs(
+    path: PathLike,
+    v: ArrayLike,
+    f: ArrayLike,
+    targets: Union[ArrayLike, Sequence[ArrayLike]],
+    names: Optional[Sequence[str]] = None,
+) -> None: ...
+def read_animation(
+    path: PathLike, reference: Optional[PathLike] = None
+) -> Tuple[Frames, Faces, List[str]]: ...
+def write_animation(
+    path: PathLike, frames: Union[ArrayLike, Sequence[ArrayLike]], f: ArrayLike, fps: float = 24.0
+) -> None: ...
+def metrics(v_rest: ArrayLike, v: ArrayLike, f: ArrayLike) -> Dict[str, Any]: ...
+
+class PhysicalBlend:
+    def __init__(
+        self,
+        base: ArrayLike,
+        targets: Union[ArrayLike, Sequence[ArrayLike]],
+        faces: ArrayLike,
+        *,
+        fixed: Union[None, str, Sequence[int]] = None,
+        hinge_weight: Optional[float] = None,
+        kinematic_stretch: Optional[float] = None,
+        gradient_tolerance: Optional[float] = None,
+        max_newton_iterations: Optional[int] = None,
+    ) -> None: ...
+    def solve(
+        self,
+        weights: Union[float, Sequence[float]],
+        *,
+        convex: bool = False,
+        pulls: Union[
+            None, Mapping[int, Sequence[float]], Sequence[Tuple[int, Sequence[float]]]
+        ] = None,
+    ) -> Vertices: ...
+    def solve_many(
+        self,
+        weights: Sequence[Union[float, Sequence[float]]],
+        *,
+        convex: bool = False,
+        threads: int = 1,
+    ) -> Frames: ...
+    @property
+    def last_stats(self) -> Optional[Dict[str, Any]]: ...
+    @property
+    def summary(self) -> Dict[str, Any]: ...
+    @property
+    def num_targets(self) -> int: ...
+
+class Correspondence:
+    @staticmethod
+    def from_markers(
+        vs: ArrayLike,
+        fs: ArrayLike,
+        vt: ArrayLike,
+        ft: ArrayLike,
+        markers: Union[PathLike, Sequence[Sequence[int]], ArrayLike],
+    ) -> "Correspondence": ...
+    @staticmethod
+    def identity(v: ArrayLike, f: ArrayLike) -> "Correspondence": ...
+    @staticmethod
+    def load(path: PathLike) -> "Correspondence": ...
+    def save(self, path: PathLike) -> None: ...
+    @property
+    def matches(self) -> List[List[int]]: ...
+    @property
+    def marker_residuals(self) -> List[Dict[str, Any]]: ...
+    @property
+    def normal_violations(self) -> List[int]: ...
+    @property
+    def warped(self) -> Optional[Tuple[Vertices, Vertices]]: ...
+
+class Transfer:
+    def __init__(
+        self,
+        vs: ArrayLike,
+        fs: ArrayLike,
+        vt: ArrayLike,
+        ft: ArrayLike,
+        correspondence: Correspondence,
+        *,
+        combine: str = "mean",
+        translation: str = "follow",
+    ) -> None: ...
+    def transfer(self, frame: ArrayLike) -> Vertices: ...
+    def transfer_many(self, frames: Union[ArrayLike, Sequence[ArrayLike]]) -> Frames: ...

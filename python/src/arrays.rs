@@ -1,0 +1,215 @@
+//! numpy arrays in and out, in libigl's conventions: vertices `V` as `(n, 3) float64`,
+//! triangles `F` as `(m, 3)` integers, sequences of frames as `(k, n, 3) float64`.
+//!
+//! Any strided array is read through a view (no copy on the Python side); `float32` vertices
+//! and any integer dtype for faces are accepted and converted. Everything else is a
+//! `MeshError` naming the argument, its dtype or shape, and the offending row.
+
+use crate::errors::{new_err, Kind};
+use morphkit::mesh::Point;
+use numpy::ndarray::{Array2, Array3, ArrayView2};
+use numpy::{
+    IntoPyArray, PyArray2, PyArray3, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArray,
+    PyUntypedArrayMethods,
+};
+use pyo3::prelude::*;
+
+fn describe(obj: &Bound<'_, PyAny>) -> String {
+    match obj.cast::<PyUntypedArray>() {
+        Ok(a) => format!("an array of dtype {} and shape {:?}", a.dtype(), a.shape()),
+        Err(_) => format!(
+            "a {}",
+            obj.get_type()
+                .name()
+                .map(|n| n.to_string())
+                .unwrap_or_else(|_| "value".into())
+        ),
+    }
+}
+
+fn rows_of(name: &str, view: ArrayView2<'_, f64>) -> PyResult<Vec<Point>> {
+    if view.ncols() != 3 {
+        return Err(new_err(
+            Kind::Mesh,
+            format!("{name}: expected shape (n, 3), got {:?}", view.shape()),
+        ));
+    }
+    let mut out = Vec::with_capacity(view.nrows());
+    for (i, r) in view.outer_iter().enumerate() {
+        let p = [r[0], r[1], r[2]];
+        if let Some(k) = p.iter().position(|x| !x.is_finite()) {
+            return Err(new_err(
+                Kind::Mesh,
+                format!(
+                    "{name}: row {i} has a non-finite coordinate {} ({})",
+                    k, p[k]
+                ),
+            ));
+        }
+        out.push(p);
+    }
+    Ok(out)
+}
+
+/// Reads an `(n, 3)` float array (`float64`, or `float32` converted) into points, refusing
+/// NaN and infinity.
+pub fn points(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<Point>> {
+    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, f64>>() {
+        return rows_of(name, a.as_array());
+    }
+    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, f32>>() {
+        let v = a.as_array().mapv(f64::from);
+        return rows_of(name, v.view());
+    }
+    Err(new_err(
+        Kind::Mesh,
+        format!(
+            "{name}: expected a float64 array of shape (n, 3), got {}",
+            describe(obj)
+        ),
+    ))
+}
+
+fn check_faces<T: Copy + TryInto<u32> + std::fmt::Display>(
+    name: &str,
+    view: ArrayView2<'_, T>,
+    num_vertices: Option<usize>,
+) -> PyResult<Vec<[u32; 3]>> {
+    if view.ncols() != 3 {
+        return Err(new_err(
+            Kind::Mesh,
+            format!(
+                "{name}: expected shape (m, 3) (triangles), got {:?}",
+                view.shape()
+            ),
+        ));
+    }
+    let mut out = Vec::with_capacity(view.nrows());
+    for (f, r) in view.outer_iter().enumerate() {
+        let mut t = [0u32; 3];
+        for k in 0..3 {
+            let bad = || {
+                new_err(
+                    Kind::Mesh,
+                    format!(
+                        "{name}: face {f} has vertex index {} out of range{}",
+                        r[k],
+                        num_vertices.map_or(String::new(), |n| format!(" (0..{n})"))
+                    ),
+                )
+            };
+            let i: u32 = r[k].try_into().map_err(|_| bad())?;
+            if num_vertices.is_some_and(|n| i as usize >= n) {
+                return Err(bad());
+            }
+            t[k] = i;
+        }
+        out.push(t);
+    }
+    Ok(out)
+}
+
+/// Reads an `(m, 3)` integer array of vertex indices, each in `0..num_vertices`.
+pub fn faces(
+    name: &str,
+    obj: &Bound<'_, PyAny>,
+    num_vertices: Option<usize>,
+) -> PyResult<Vec<[u32; 3]>> {
+    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, i64>>() {
+        return check_faces(name, a.as_array(), num_vertices);
+    }
+    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, i32>>() {
+        return check_faces(name, a.as_array(), num_vertices);
+    }
+    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, u32>>() {
+        return check_faces(name, a.as_array(), num_vertices);
+    }
+    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, u64>>() {
+        return check_faces(name, a.as_array(), num_vertices);
+    }
+    Err(new_err(
+        Kind::Mesh,
+        format!(
+            "{name}: expected an integer array of shape (m, 3), got {}",
+            describe(obj)
+        ),
+    ))
+}
+
+/// Reads frames: a `(k, n, 3)` float array or a sequence of `(n, 3)` arrays. Each frame must
+/// have `num_vertices` rows when given.
+pub fn frames(
+    name: &str,
+    obj: &Bound<'_, PyAny>,
+    num_vertices: Option<usize>,
+) -> PyResult<Vec<Vec<Point>>> {
+    let out: Vec<Vec<Point>> = if let Ok(a) = obj.extract::<PyReadonlyArray3<'_, f64>>() {
+        let v = a.as_array();
+        let mut out = Vec::with_capacity(v.shape()[0]);
+        for (i, f) in v.outer_iter().enumerate() {
+            out.push(rows_of(&format!("{name}[{i}]"), f)?);
+        }
+        out
+    } else {
+        // Other dtypes and sequences of (n, 3) arrays, frame by frame.
+        if let Ok(a) = obj.cast::<PyUntypedArray>() {
+            if a.ndim() != 3 {
+                return Err(new_err(
+                    Kind::Mesh,
+                    format!("{name}: expected shape (k, n, 3), got {:?}", a.shape()),
+                ));
+            }
+        }
+        let iter = obj.try_iter().map_err(|_| {
+            new_err(
+                Kind::Mesh,
+                format!(
+                    "{name}: expected a (k, n, 3) array or a sequence of (n, 3) arrays, got {}",
+                    describe(obj)
+                ),
+            )
+        })?;
+        let mut out = Vec::new();
+        for (i, item) in iter.enumerate() {
+            out.push(points(&format!("{name}[{i}]"), &item?)?);
+        }
+        out
+    };
+    if let Some(n) = num_vertices {
+        if let Some(i) = out.iter().position(|f| f.len() != n) {
+            return Err(new_err(
+                Kind::Mesh,
+                format!("{name}[{i}]: has {} vertices, expected {n}", out[i].len()),
+            ));
+        }
+    }
+    Ok(out)
+}
+
+/// Points as a new `(n, 3) float64` array.
+pub fn to_array<'py>(py: Python<'py>, p: &[Point]) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = p.iter().flatten().copied().collect();
+    Array2::from_shape_vec((p.len(), 3), flat)
+        .expect("n × 3 elements")
+        .into_pyarray(py)
+}
+
+/// Frames as a new `(k, n, 3) float64` array (all frames have `n` vertices).
+pub fn to_array3<'py>(
+    py: Python<'py>,
+    frames: &[Vec<Point>],
+    n: usize,
+) -> Bound<'py, PyArray3<f64>> {
+    let flat: Vec<f64> = frames.iter().flatten().flatten().copied().collect();
+    Array3::from_shape_vec((frames.len(), n, 3), flat)
+        .expect("k × n × 3 elements")
+        .into_pyarray(py)
+}
+
+/// Triangles as a new `(m, 3) int64` array.
+pub fn faces_to_array<'py>(py: Python<'py>, t: &[[u32; 3]]) -> Bound<'py, PyArray2<i64>> {
+    let flat: Vec<i64> = t.iter().flatten().map(|&i| i64::from(i)).collect();
+    Array2::from_shape_vec((t.len(), 3), flat)
+        .expect("m × 3 elements")
+        .into_pyarray(py)
+}

@@ -1,0 +1,293 @@
+//! `PhysicalBlend`: the library's stateful physical-blendshape solver (Ma et al. 2012), built
+//! once per rig, then solved for many weight vectors with the GIL released.
+
+use crate::arrays::{self, to_array, to_array3};
+use crate::dict::to_dict;
+use crate::errors::{new_err, IntoPyResult, Kind};
+use crate::mesh::from_arrays;
+use morphkit::mesh::ShapeSet;
+use morphkit::springs::{
+    BlendOptions, FixedVertices, FrameStats, PhysicalBlend, PointTarget, Weights,
+};
+use numpy::{PyArray2, PyArray3};
+use pyo3::prelude::*;
+
+/// The physical blend of a base shape and its targets (Ma et al. 2012).
+///
+/// Built once (springs, hinges, boundary conditions, symbolic factorization); each
+/// :meth:`solve` then returns the canonical equilibrium for a weight vector, a function of the
+/// weights alone: the same weights give the same shape in any order and on any thread.
+///
+/// >>> blend = morphkit.PhysicalBlend(V0, [V1], F)
+/// >>> half = blend.solve([0.5])
+/// >>> blend.last_stats["converged"]
+/// True
+#[pyclass(name = "PhysicalBlend", module = "morphkit")]
+pub struct PyPhysicalBlend {
+    inner: PhysicalBlend,
+    targets: usize,
+    vertices: usize,
+    last: Option<FrameStats>,
+}
+
+fn fixed_vertices(obj: Option<&Bound<'_, PyAny>>) -> PyResult<FixedVertices> {
+    let Some(obj) = obj else {
+        return Ok(FixedVertices::Auto);
+    };
+    if let Ok(s) = obj.extract::<String>() {
+        return match s.as_str() {
+            "auto" => Ok(FixedVertices::Auto),
+            "none" => Ok(FixedVertices::None),
+            other => Err(new_err(
+                Kind::Blend,
+                format!("fixed: expected \"auto\", \"none\" or vertex ids, got {other:?}"),
+            )),
+        };
+    }
+    let ids: Vec<i64> = obj.extract().map_err(|_| {
+        new_err(
+            Kind::Blend,
+            "fixed: expected \"auto\", \"none\" or a sequence of vertex ids",
+        )
+    })?;
+    let ids = ids
+        .iter()
+        .map(|&i| {
+            u32::try_from(i)
+                .map_err(|_| new_err(Kind::Blend, format!("fixed: vertex id {i} out of range")))
+        })
+        .collect::<PyResult<Vec<u32>>>()?;
+    Ok(FixedVertices::Ids(ids))
+}
+
+fn weights(obj: &Bound<'_, PyAny>, convex: bool, targets: usize) -> PyResult<Weights> {
+    let w: Vec<f64> = match obj.extract::<f64>() {
+        Ok(a) if !convex && targets == 1 => vec![a],
+        Ok(_) => {
+            return Err(new_err(
+                Kind::Blend,
+                format!(
+                    "weights: a single number needs exactly one target (delta form); \
+                     this blend has {targets}; pass a sequence"
+                ),
+            ))
+        }
+        Err(_) => obj.extract().map_err(|_| {
+            new_err(
+                Kind::Blend,
+                "weights: expected a number or a sequence of numbers",
+            )
+        })?,
+    };
+    Ok(if convex {
+        Weights::Convex(w)
+    } else {
+        Weights::Delta(w)
+    })
+}
+
+fn pulls(obj: Option<&Bound<'_, PyAny>>, vertices: usize) -> PyResult<Vec<PointTarget>> {
+    let Some(obj) = obj else {
+        return Ok(Vec::new());
+    };
+    let items: Vec<(i64, [f64; 3])> = if let Ok(d) = obj.cast::<pyo3::types::PyDict>() {
+        d.iter()
+            .map(|(k, v)| Ok((k.extract()?, v.extract()?)))
+            .collect::<PyResult<_>>()
+    } else {
+        obj.extract()
+    }
+    .map_err(|_| {
+        new_err(
+            Kind::Blend,
+            "pulls: expected {vertex: (x, y, z)} or a sequence of (vertex, (x, y, z))",
+        )
+    })?;
+    items
+        .into_iter()
+        .map(|(v, p)| {
+            let vertex = u32::try_from(v)
+                .ok()
+                .filter(|&v| (v as usize) < vertices)
+                .ok_or_else(|| {
+                    new_err(
+                        Kind::Blend,
+                        format!("pulls: vertex {v} out of range (0..{vertices})"),
+                    )
+                })?;
+            if p.iter().any(|x| !x.is_finite()) {
+                return Err(new_err(
+                    Kind::Blend,
+                    format!("pulls: vertex {v} has a non-finite position {p:?}"),
+                ));
+            }
+            Ok(PointTarget {
+                vertex,
+                position: p,
+                stiffness: PointTarget::HARD_STIFFNESS,
+            })
+        })
+        .collect()
+}
+
+#[pymethods]
+impl PyPhysicalBlend {
+    /// `base` `(n, 3)`, `targets` `(k, n, 3)` or a list of `(n, 3)`, `F` `(m, 3)` shared by all.
+    ///
+    /// `fixed`: `"auto"` (default: vertices that move in no shape), `"none"`, or vertex ids
+    /// (interpolated linearly). `hinge_weight` (default 0.01, 0 turns the bending term off),
+    /// `kinematic_stretch` (default 10), `gradient_tolerance` (default 1e-6),
+    /// `max_newton_iterations` (default 300): see the library's `BlendOptions`.
+    #[new]
+    #[pyo3(signature = (base, targets, faces, *, fixed=None, hinge_weight=None,
+        kinematic_stretch=None, gradient_tolerance=None, max_newton_iterations=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        base: &Bound<'_, PyAny>,
+        targets: &Bound<'_, PyAny>,
+        faces: &Bound<'_, PyAny>,
+        fixed: Option<&Bound<'_, PyAny>>,
+        hinge_weight: Option<f64>,
+        kinematic_stretch: Option<f64>,
+        gradient_tolerance: Option<f64>,
+        max_newton_iterations: Option<usize>,
+    ) -> PyResult<Self> {
+        let mesh = from_arrays("base", base, faces)?;
+        let n = mesh.num_vertices();
+        let targets = arrays::frames("targets", targets, Some(n))?;
+        if targets.is_empty() {
+            return Err(new_err(
+                Kind::Blend,
+                "targets: at least one target is needed",
+            ));
+        }
+        let k = targets.len();
+        let mut named = vec![("base".to_string(), mesh.positions.clone())];
+        named.extend(
+            targets
+                .into_iter()
+                .enumerate()
+                .map(|(i, p)| (format!("target_{i}"), p)),
+        );
+        let shapes = ShapeSet::new(mesh, named).py(Kind::Mesh)?;
+        let mut opts = BlendOptions {
+            fixed: fixed_vertices(fixed)?,
+            ..BlendOptions::default()
+        };
+        if let Some(w) = hinge_weight {
+            opts.hinges.weight = w;
+        }
+        if let Some(s) = kinematic_stretch {
+            opts.kinematic_stretch = s;
+        }
+        if let Some(t) = gradient_tolerance {
+            opts.gradient_tolerance = t;
+        }
+        if let Some(m) = max_newton_iterations {
+            opts.max_newton_iterations = m;
+        }
+        let inner = py
+            .detach(|| PhysicalBlend::new(&shapes, &opts))
+            .py(Kind::Blend)?;
+        Ok(Self {
+            inner,
+            targets: k,
+            vertices: n,
+            last: None,
+        })
+    }
+
+    /// The equilibrium for `weights` as a new `(n, 3)` array.
+    ///
+    /// `weights`: one per target in the delta form `base + Σ wᵢ (targetᵢ − base)` (a plain
+    /// number when there is one target), or with `convex=True` one per shape (base first)
+    /// summing to 1. `pulls`: `{vertex: (x, y, z)}` hard pulls (Ma et al. Sec. 4; the vertex's
+    /// part must be held by fixed vertices). Statistics of the solve are in
+    /// :attr:`last_stats`. The GIL is released while solving.
+    #[pyo3(signature = (weights, *, convex=false, pulls=None))]
+    fn solve<'py>(
+        &mut self,
+        py: Python<'py>,
+        weights: &Bound<'py, PyAny>,
+        convex: bool,
+        pulls: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let w = self::weights(weights, convex, self.targets)?;
+        let targets = self::pulls(pulls, self.vertices)?;
+        let inner = &mut self.inner;
+        let result = py
+            .detach(|| inner.solve_with(&w, &targets, None))
+            .py(Kind::Blend)?;
+        let out = to_array(py, &result.positions);
+        self.last = Some(result.stats);
+        Ok(out)
+    }
+
+    /// Solves every weight vector of `weights` (a sequence, each as in :meth:`solve`) on up to
+    /// `threads` threads and returns a `(len(weights), n, 3)` array, in input order, equal to
+    /// solving them one by one. :attr:`last_stats` is the last frame's.
+    #[pyo3(signature = (weights, *, convex=false, threads=1))]
+    fn solve_many<'py>(
+        &mut self,
+        py: Python<'py>,
+        weights: &Bound<'py, PyAny>,
+        convex: bool,
+        threads: usize,
+    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let rows = weights
+            .try_iter()
+            .map_err(|_| {
+                new_err(
+                    Kind::Blend,
+                    "weights: expected a sequence of weight vectors",
+                )
+            })?
+            .map(|row| self::weights(&row?, convex, self.targets))
+            .collect::<PyResult<Vec<Weights>>>()?;
+        let inner = &mut self.inner;
+        let results = py.detach(|| inner.solve_many(&rows, threads));
+        let mut frames = Vec::with_capacity(results.len());
+        let mut last = None;
+        for (i, r) in results.into_iter().enumerate() {
+            let r = r.map_err(|e| {
+                new_err(
+                    Kind::Blend,
+                    format!("frame {i}: {}", crate::errors::chain(&e)),
+                )
+            })?;
+            frames.push(r.positions);
+            last = Some(r.stats);
+        }
+        self.last = last;
+        Ok(to_array3(py, &frames, self.vertices))
+    }
+
+    /// Statistics of the last solve as a dict (Newton iterations, factorizations, gradient
+    /// norm and tolerance, energy, `converged`, clamped springs, unconverged vertices,
+    /// seconds), or `None` before the first.
+    #[getter]
+    fn last_stats<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.last.as_ref().map(|s| to_dict(py, s)).transpose()
+    }
+
+    /// What the solver was built with (vertices, springs, hinges, fixed and kinematic
+    /// vertices, free unknowns, factor size, predicted bytes) as a dict.
+    #[getter]
+    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_dict(py, self.inner.summary())
+    }
+
+    /// Number of targets (shapes other than the base).
+    #[getter]
+    fn num_targets(&self) -> usize {
+        self.targets
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "PhysicalBlend(vertices={}, targets={})",
+            self.vertices, self.targets
+        )
+    }
+}

@@ -1,0 +1,158 @@
+//! File I/O: meshes, glTF morph targets and animations, through the library's readers and
+//! writers (atomic writes; an input is never overwritten).
+
+use crate::arrays::{self, faces_to_array, to_array, to_array3};
+use crate::errors::{IntoPyResult, Kind};
+use crate::mesh::from_arrays;
+use morphkit::io::{self as mio, FramesOptions, GltfMorphs};
+use morphkit::mesh::ShapeSet;
+use numpy::{PyArray2, PyArray3};
+use pyo3::prelude::*;
+use std::path::PathBuf;
+
+type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>);
+
+/// Reads one mesh (`.obj`, `.obj.gz`, `.ply`, `.off`, `.gltf`, `.glb`) and returns `(V, F)`:
+/// `V` `(n, 3) float64`, `F` `(m, 3) int64` (polygons fan-triangulated).
+///
+/// >>> V, F = morphkit.read("horse.obj")
+#[pyfunction]
+pub fn read<'py>(py: Python<'py>, path: PathBuf) -> PyResult<MeshArrays<'py>> {
+    let mesh = py.detach(|| mio::read_mesh(&path)).py(Kind::File)?;
+    Ok((
+        to_array(py, &mesh.positions),
+        faces_to_array(py, &mesh.triangles),
+    ))
+}
+
+/// Writes `(V, F)` atomically; the format follows the extension (`.obj`, `.obj.gz`, `.ply`,
+/// `.off`, `.glb`, `.gltf`).
+///
+/// >>> morphkit.write("out.ply", V, F)
+#[pyfunction]
+pub fn write(
+    py: Python<'_>,
+    path: PathBuf,
+    v: &Bound<'_, PyAny>,
+    f: &Bound<'_, PyAny>,
+) -> PyResult<()> {
+    let mesh = from_arrays("mesh", v, f)?;
+    py.detach(|| mio::write_mesh(&path, &mesh)).py(Kind::File)
+}
+
+/// Reads a glTF/GLB file's first mesh with its morph targets and returns
+/// `(V, F, targets, names)`: `targets` `(k, n, 3)` absolute positions, `names` a list of `k`
+/// strings (`target_0`, … when the file gives none).
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+pub fn read_morphs<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+) -> PyResult<(
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<i64>>,
+    Bound<'py, PyArray3<f64>>,
+    Vec<String>,
+)> {
+    let m = py.detach(|| mio::read_gltf_morphs(&path)).py(Kind::File)?;
+    let n = m.base.num_vertices();
+    Ok((
+        to_array(py, &m.base.positions),
+        faces_to_array(py, &m.base.triangles),
+        to_array3(py, &m.targets, n),
+        m.target_names,
+    ))
+}
+
+/// Writes a glTF/GLB file with the base mesh `(V, F)` and one morph target per row of
+/// `targets` `(k, n, 3)` (absolute positions), named by `names` (default `target_0`, …).
+#[pyfunction]
+#[pyo3(signature = (path, v, f, targets, names=None))]
+pub fn write_morphs(
+    py: Python<'_>,
+    path: PathBuf,
+    v: &Bound<'_, PyAny>,
+    f: &Bound<'_, PyAny>,
+    targets: &Bound<'_, PyAny>,
+    names: Option<Vec<String>>,
+) -> PyResult<()> {
+    let base = from_arrays("base", v, f)?;
+    let targets = arrays::frames("targets", targets, Some(base.num_vertices()))?;
+    let names = match names {
+        Some(n) if n.len() != targets.len() => {
+            return Err(crate::errors::new_err(
+                Kind::Mesh,
+                format!("names: {} names for {} targets", n.len(), targets.len()),
+            ))
+        }
+        Some(n) => n,
+        None => (0..targets.len()).map(|i| format!("target_{i}")).collect(),
+    };
+    let morphs = GltfMorphs {
+        base,
+        target_names: names,
+        targets,
+        weight_keys: Vec::new(),
+    };
+    py.detach(|| mio::write_gltf_morphs(&path, &morphs))
+        .py(Kind::File)
+}
+
+/// Reads an animation and returns `(frames, F, names)`: `frames` `(k, n, 3)`. `path` is a
+/// directory of OBJ frames, a glTF/GLB with a morph-weight animation (one frame per key), a
+/// PC2 cache (needs `reference`, a mesh file giving the connectivity) or a single mesh.
+#[pyfunction]
+#[pyo3(signature = (path, reference=None))]
+#[allow(clippy::type_complexity)]
+pub fn read_animation<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    reference: Option<PathBuf>,
+) -> PyResult<(
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray2<i64>>,
+    Vec<String>,
+)> {
+    let set = py
+        .detach(|| mio::read_animation(&path, reference.as_deref()))
+        .py(Kind::File)?;
+    Ok((
+        to_array3(py, set.all_positions(), set.num_vertices()),
+        faces_to_array(py, set.triangles()),
+        set.names().to_vec(),
+    ))
+}
+
+/// Writes `frames` `(k, n, 3)` over the connectivity `F`: a directory of numbered OBJ frames
+/// (a path without extension), a `.glb`/`.gltf` morph-weight animation at `fps`, or a `.pc2`
+/// cache.
+#[pyfunction]
+#[pyo3(signature = (path, frames, f, fps=24.0))]
+pub fn write_animation(
+    py: Python<'_>,
+    path: PathBuf,
+    frames: &Bound<'_, PyAny>,
+    f: &Bound<'_, PyAny>,
+    fps: f64,
+) -> PyResult<()> {
+    let frames = arrays::frames("frames", frames, None)?;
+    let Some(first) = frames.first() else {
+        return Err(crate::errors::new_err(Kind::Mesh, "frames: no frames"));
+    };
+    let n = first.len();
+    let v0 = to_array(py, first);
+    let base = from_arrays("frames[0]", v0.as_any(), f)?;
+    let named = frames
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (format!("frame_{i:04}"), p.clone()))
+        .collect();
+    let set = ShapeSet::new(base, named).py(Kind::Mesh)?;
+    debug_assert_eq!(set.num_vertices(), n);
+    let opts = FramesOptions {
+        fps,
+        ..FramesOptions::default()
+    };
+    py.detach(|| mio::write_frames(&path, &set, &opts))
+        .py(Kind::File)
+}

@@ -1,0 +1,31 @@
+//! Python bindings of morphkit: a thin client of the library (no algorithm is written here).
+//!
+//! Arrays follow libigl's Python conventions (`V` `(n, 3) float64`, `F` `(m, 3)` integers);
+//! library errors become the exceptions of `morphkit/_errors.py`; every solve releases the GIL.
+
+mod arrays;
+mod blend;
+mod dict;
+mod errors;
+mod io;
+mod mesh;
+mod metrics;
+mod transfer;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+fn _morphkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(io::read, m)?)?;
+    m.add_function(wrap_pyfunction!(io::write, m)?)?;
+    m.add_function(wrap_pyfunction!(io::read_morphs, m)?)?;
+    m.add_function(wrap_pyfunction!(io::write_morphs, m)?)?;
+    m.add_function(wrap_pyfunction!(io::read_animation, m)?)?;
+    m.add_function(wrap_pyfunction!(io::write_animation, m)?)?;
+    m.add_function(wrap_pyfunction!(metrics::metrics, m)?)?;
+    m.add_class::<blend::PyPhysicalBlend>()?;
+    m.add_class::<transfer::PyCorrespondence>()?;
+    m.add_class::<transfer::PyTransfer>()?;
+    Ok(())
+}

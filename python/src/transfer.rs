@@ -1,0 +1,283 @@
+//! Deformation transfer (Sumner & Popović 2004; Wang & Lee 2008 Sec. 4): `Correspondence`
+//! (markers → triangle correspondence by least-squares meshes) and `Transfer` (prefactored,
+//! then one cheap solve per frame with the GIL released).
+
+use crate::arrays::{self, to_array, to_array3};
+use crate::dict::to_dict;
+use crate::errors::{new_err, IntoPyResult, Kind};
+use crate::mesh::from_arrays;
+use morphkit::transfer::{
+    correspond, AnimationTransfer, Correspondence, CorrespondenceOptions, GradientCombine, Markers,
+    TransferOptions, TranslationMode,
+};
+use numpy::{PyArray2, PyArray3};
+use pyo3::prelude::*;
+use std::path::PathBuf;
+
+/// A target-triangle → source-triangles correspondence, reusable across transfers and saved
+/// as the same JSON file the CLI's `morphkit correspond` writes.
+///
+/// >>> c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, [[12, 40], [503, 388], ...])
+/// >>> c.save("horse-camel.corr.json")
+#[pyclass(name = "Correspondence", module = "morphkit", frozen)]
+pub struct PyCorrespondence {
+    pub inner: Correspondence,
+    /// The warped meshes (only after `from_markers`).
+    warped: Option<(Vec<morphkit::mesh::Point>, Vec<morphkit::mesh::Point>)>,
+}
+
+fn markers_of(obj: &Bound<'_, PyAny>) -> PyResult<Markers> {
+    if let Ok(path) = obj.extract::<PathBuf>() {
+        if !obj.is_instance_of::<pyo3::types::PyList>() {
+            return Markers::read(&path).py(Kind::File);
+        }
+    }
+    let pairs: Vec<[i64; 2]> = obj.extract().map_err(|_| {
+        new_err(
+            Kind::Transfer,
+            "markers: expected a markers JSON path or a sequence of (source, target) vertex pairs",
+        )
+    })?;
+    let pairs = pairs
+        .into_iter()
+        .enumerate()
+        .map(|(k, [s, t])| match (u32::try_from(s), u32::try_from(t)) {
+            (Ok(s), Ok(t)) => Ok([s, t]),
+            _ => Err(new_err(
+                Kind::Transfer,
+                format!("markers: pair {k} ({s}, {t}) has a negative or too large vertex id"),
+            )),
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    Ok(Markers::new(pairs))
+}
+
+#[pymethods]
+impl PyCorrespondence {
+    /// Computes the correspondence of source `(VS, FS)` and target `(VT, FT)` from marker
+    /// pairs (a sequence of `(source_vertex, target_vertex)`, 0-based, or the path of a
+    /// `{"pairs": [[s, t], …]}` JSON file), by least-squares-mesh warps (Wang & Lee Sec. 4.1).
+    #[staticmethod]
+    #[pyo3(signature = (vs, fs, vt, ft, markers))]
+    fn from_markers(
+        py: Python<'_>,
+        vs: &Bound<'_, PyAny>,
+        fs: &Bound<'_, PyAny>,
+        vt: &Bound<'_, PyAny>,
+        ft: &Bound<'_, PyAny>,
+        markers: &Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
+        let source = from_arrays("source", vs, fs)?;
+        let target = from_arrays("target", vt, ft)?;
+        let markers = markers_of(markers)?;
+        let r = py
+            .detach(|| {
+                correspond(
+                    &source,
+                    &target,
+                    &markers,
+                    &CorrespondenceOptions::default(),
+                )
+            })
+            .py(Kind::Transfer)?;
+        Ok(Self {
+            inner: r.correspondence,
+            warped: Some((r.warped_source, r.warped_target)),
+        })
+    }
+
+    /// The identity correspondence of a mesh `(V, F)` with itself.
+    #[staticmethod]
+    fn identity(v: &Bound<'_, PyAny>, f: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let mesh = from_arrays("mesh", v, f)?;
+        Ok(Self {
+            inner: Correspondence::identity(&mesh),
+            warped: None,
+        })
+    }
+
+    /// Reads a correspondence JSON file (from `morphkit correspond` or :meth:`save`).
+    #[staticmethod]
+    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let text = py
+            .detach(|| std::fs::read_to_string(&path))
+            .map_err(|e| new_err(Kind::File, format!("{}: {e}", path.display())))?;
+        let inner = Correspondence::from_json(&text).map_err(|e| {
+            new_err(
+                Kind::File,
+                format!("{}: {}", path.display(), crate::errors::chain(&e)),
+            )
+        })?;
+        Ok(Self {
+            inner,
+            warped: None,
+        })
+    }
+
+    /// Writes the correspondence as JSON, atomically.
+    fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let json = self.inner.to_json();
+        py.detach(|| morphkit::io::write_atomic(&path, json.as_bytes()))
+            .py(Kind::File)
+    }
+
+    /// Source triangles matched to each target triangle, as a list of lists (nearest first).
+    #[getter]
+    fn matches(&self) -> Vec<Vec<u32>> {
+        (0..self.inner.target_triangles)
+            .map(|t| self.inner.matches_of(t).to_vec())
+            .collect()
+    }
+
+    /// Per marker: source and target vertex, residuals, and the relative residual, as dicts.
+    #[getter]
+    fn marker_residuals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_dict(py, &self.inner.marker_residuals)
+    }
+
+    /// Target triangles whose match fails the normal test (places that need more markers).
+    #[getter]
+    fn normal_violations(&self) -> Vec<u32> {
+        self.inner.normal_violations.clone()
+    }
+
+    /// The warped source and target vertices `(WS, WT)` of :meth:`from_markers`, or `None`.
+    #[getter]
+    #[allow(clippy::type_complexity)]
+    fn warped<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> Option<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
+        self.warped
+            .as_ref()
+            .map(|(s, t)| (to_array(py, s), to_array(py, t)))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Correspondence(source_triangles={}, target_triangles={}, identity={})",
+            self.inner.source_triangles, self.inner.target_triangles, self.inner.identity
+        )
+    }
+}
+
+/// A deformation transfer from a source reference `(VS, FS)` onto a target `(VT, FT)`, set up
+/// once (the target's normal equations are factored), then :meth:`transfer` per frame.
+///
+/// `combine`: `"mean"` (default) or `"nearest"`, how several matched source gradients
+/// combine. `translation`: `"follow"` (default; the target's marker centroid follows the
+/// source's, scaled by the size ratio) or `"fixed"` (the paper's convention).
+///
+/// >>> t = morphkit.Transfer(VS, FS, VT, FT, c)
+/// >>> frames_t = t.transfer_many(frames_s)
+#[pyclass(name = "Transfer", module = "morphkit", frozen)]
+pub struct PyTransfer {
+    inner: AnimationTransfer,
+    source_vertices: usize,
+    target_vertices: usize,
+}
+
+#[pymethods]
+impl PyTransfer {
+    #[new]
+    #[pyo3(signature = (vs, fs, vt, ft, correspondence, *, combine="mean", translation="follow"))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        vs: &Bound<'_, PyAny>,
+        fs: &Bound<'_, PyAny>,
+        vt: &Bound<'_, PyAny>,
+        ft: &Bound<'_, PyAny>,
+        correspondence: &PyCorrespondence,
+        combine: &str,
+        translation: &str,
+    ) -> PyResult<Self> {
+        let source = from_arrays("source", vs, fs)?;
+        let target = from_arrays("target", vt, ft)?;
+        let combine = match combine {
+            "mean" => GradientCombine::Mean,
+            "nearest" => GradientCombine::Nearest,
+            other => {
+                return Err(new_err(
+                    Kind::Transfer,
+                    format!("combine: expected \"mean\" or \"nearest\", got {other:?}"),
+                ))
+            }
+        };
+        let translation = match translation {
+            "follow" => TranslationMode::FollowMarkers,
+            "fixed" => TranslationMode::FixedVertex,
+            other => {
+                return Err(new_err(
+                    Kind::Transfer,
+                    format!("translation: expected \"follow\" or \"fixed\", got {other:?}"),
+                ))
+            }
+        };
+        let opts = TransferOptions {
+            combine,
+            translation,
+            ..TransferOptions::default()
+        };
+        let corr = &correspondence.inner;
+        let inner = py
+            .detach(|| AnimationTransfer::new(&source, &target, corr, &opts))
+            .py(Kind::Transfer)?;
+        Ok(Self {
+            inner,
+            source_vertices: source.num_vertices(),
+            target_vertices: target.num_vertices(),
+        })
+    }
+
+    /// One source frame `(n_s, 3)` (same connectivity as the source reference) onto the
+    /// target: a new `(n_t, 3)` array.
+    fn transfer<'py>(
+        &self,
+        py: Python<'py>,
+        frame: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let frame = arrays::points("frame", frame)?;
+        if frame.len() != self.source_vertices {
+            return Err(new_err(
+                Kind::Mesh,
+                format!(
+                    "frame: has {} vertices, the source has {}",
+                    frame.len(),
+                    self.source_vertices
+                ),
+            ));
+        }
+        let inner = &self.inner;
+        let x = py
+            .detach(|| inner.transfer_frame(&frame))
+            .py(Kind::Transfer)?;
+        Ok(to_array(py, &x))
+    }
+
+    /// Every frame of `frames` (`(k, n_s, 3)` or a list) onto the target: `(k, n_t, 3)`.
+    fn transfer_many<'py>(
+        &self,
+        py: Python<'py>,
+        frames: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let frames = arrays::frames("frames", frames, Some(self.source_vertices))?;
+        let inner = &self.inner;
+        let out = py
+            .detach(|| {
+                frames
+                    .iter()
+                    .map(|f| inner.transfer_frame(f))
+                    .collect::<Result<Vec<_>, _>>()
+            })
+            .py(Kind::Transfer)?;
+        Ok(to_array3(py, &out, self.target_vertices))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Transfer(source_vertices={}, target_vertices={})",
+            self.source_vertices, self.target_vertices
+        )
+    }
+}

@@ -1,0 +1,88 @@
+"""Correspondence and Transfer: self-transfer, persistence, and equality with the CLI."""
+
+import json
+
+import numpy as np
+import pytest
+
+import morphkit
+from conftest import bend, diag, tube
+
+
+def test_identity_self_transfer_is_exact():
+    V, F = tube()
+    c = morphkit.Correspondence.identity(V, F)
+    t = morphkit.Transfer(V, F, V, F, c, combine="nearest", translation="fixed")
+    frames = np.stack([bend(V, a) for a in (0.3, 0.9)])
+    out = t.transfer_many(frames)
+    assert out.shape == frames.shape
+    # "fixed" keeps the constraint vertex where the reference has it; the bent tubes keep
+    # vertex 0 (x = 0) in place, so the transfer reproduces them.
+    assert np.abs(out - frames).max() < 1e-8 * diag(V)
+    np.testing.assert_array_equal(t.transfer(frames[1]), out[1])
+
+
+def test_save_load_round_trip(tmp_path):
+    V, F = tube(8, 8)
+    c = morphkit.Correspondence.identity(V, F)
+    c.save(tmp_path / "c.json")
+    c2 = morphkit.Correspondence.load(tmp_path / "c.json")
+    assert c2.matches == c.matches
+    assert json.loads((tmp_path / "c.json").read_text())["identity"] is True
+    (tmp_path / "bad.json").write_text("{}")
+    with pytest.raises(morphkit.FileError, match="bad.json"):
+        morphkit.Correspondence.load(tmp_path / "bad.json")
+
+
+def test_bad_markers_and_options():
+    V, F = tube(8, 8)
+    with pytest.raises(morphkit.TransferError):
+        morphkit.Correspondence.from_markers(V, F, V, F, [[0, 0]])
+    with pytest.raises(morphkit.TransferError, match="negative"):
+        morphkit.Correspondence.from_markers(V, F, V, F, [[-1, 0]] * 8)
+    with pytest.raises(morphkit.TransferError, match="out of range|vertex"):
+        morphkit.Correspondence.from_markers(V, F, V, F, np.array([[k, k] for k in range(7)] + [[len(V), 0]]))
+    c = morphkit.Correspondence.identity(V, F)
+    with pytest.raises(morphkit.TransferError, match="combine"):
+        morphkit.Transfer(V, F, V, F, c, combine="median")
+    t = morphkit.Transfer(V, F, V, F, c)
+    with pytest.raises(morphkit.MeshError, match="vertices"):
+        t.transfer(V[:-1])
+
+
+@pytest.fixture(scope="module")
+def cat_dog():
+    import os
+    import pathlib
+
+    root = os.environ.get("MORPHKIT_DATA")
+    if not root:
+        pytest.skip("MORPHKIT_DATA is not set")
+    d = pathlib.Path(root) / "lowpoly-cat-dog"
+    for f in ("cat-reference.obj", "dog-reference.obj", "markers-cat-dog.json"):
+        if not (d / f).exists():
+            raise FileNotFoundError(d / f)
+    return d
+
+
+def test_cat_dog_equals_the_cli(tmp_path, cli, cat_dog):
+    d = cat_dog
+    frames_dir = d / "cat-run"
+    VS, FS = morphkit.read(d / "cat-reference.obj")
+    VT, FT = morphkit.read(d / "dog-reference.obj")
+    frames, _, _ = morphkit.read_animation(frames_dir)
+    c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, d / "markers-cat-dog.json")
+    assert len(c.marker_residuals) == 41
+    t = morphkit.Transfer(VS, FS, VT, FT, c)
+    ours = t.transfer_many(frames[:4])
+    out = tmp_path / "dog"
+    cli(
+        "transfer",
+        "--source-ref", d / "cat-reference.obj",
+        "--source", frames_dir,
+        "--target", d / "dog-reference.obj",
+        "--markers", d / "markers-cat-dog.json",
+        "--out", out,
+    )
+    theirs, _, _ = morphkit.read_animation(out)
+    assert np.abs(ours - theirs[:4]).max() <= 1e-9 * diag(VT)
