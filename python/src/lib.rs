@@ -10,6 +10,7 @@ mod errors;
 mod io;
 mod mesh;
 mod metrics;
+mod synth;
 mod transfer;
 
 use pyo3::prelude::*;
@@ -24,6 +25,10 @@ fn _morphkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(io::read_animation, m)?)?;
     m.add_function(wrap_pyfunction!(io::write_animation, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::metrics, m)?)?;
+    m.add_function(wrap_pyfunction!(synth::flexibility, m)?)?;
+    m.add_function(wrap_pyfunction!(synth::geodesic_distance, m)?)?;
+    m.add_function(wrap_pyfunction!(synth::synthesize, m)?)?;
+    m.add_class::<synth::PyPartitions>()?;
     m.add_class::<blend::PyPhysicalBlend>()?;
     m.add_class::<transfer::PyCorrespondence>()?;
     m.add_class::<transfer::PyTransfer>()?;
