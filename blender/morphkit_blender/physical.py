@@ -1,0 +1,290 @@
+"""Physical shape keys (Ma et al. 2012): the shape-key sliders drive a physical blend.
+
+The mesh's first shape key is the base and every other key (but the result key) a target. The
+physical result is written into the shape key `morphkit_physical` (value 1) while the target
+keys are muted, so the viewport shows it; the linear mode unmutes them again. The solver is
+built once per mesh and set of keys, then every slider change is one cheap solve. Pulls are
+objects (Empties) with a custom property `morphkit_vertex` (a vertex id), parented to the mesh
+or naming it in `morphkit_pull_target`: the vertex is held at the Empty's position (Fig. 5).
+"""
+
+import time
+
+import bpy
+import numpy as np
+
+from . import geometry
+
+RESULT_KEY = "morphkit_physical"
+_solvers = {}  # object name -> (signature, PhysicalBlend, F)
+_last = {}  # object name -> weights and pulls last solved
+_busy = [False]
+
+
+def target_keys(obj):
+    keys = obj.data.shape_keys.key_blocks
+    return [k for k in keys[1:] if k.name != RESULT_KEY]
+
+
+def _signature(obj):
+    keys = obj.data.shape_keys.key_blocks
+    digest = [len(obj.data.vertices), len(obj.data.polygons), keys[0].name]
+    for k in target_keys(obj):
+        c = geometry.key_coords(k)
+        digest.append((k.name, float(c.sum()), float(np.abs(c).sum())))
+    return tuple(digest)
+
+
+def solver_for(obj):
+    """The cached PhysicalBlend of `obj`, rebuilt when its keys or topology changed."""
+    import morphkit
+
+    sig = _signature(obj)
+    cached = _solvers.get(obj.name)
+    if cached is not None and cached[0] == sig:
+        return cached[1], cached[2]
+    keys = obj.data.shape_keys.key_blocks
+    F, _ = geometry.triangles(obj.data)
+    base = geometry.key_coords(keys[0])
+    targets = [geometry.key_coords(k) for k in target_keys(obj)]
+    blend = morphkit.PhysicalBlend(base, targets, F)
+    _solvers[obj.name] = (sig, blend, F)
+    return blend, F
+
+
+def pulls_of(obj, scene):
+    """Pull targets {vertex: object-space position} from the scene's pull objects."""
+    inv = obj.matrix_world.inverted()
+    out = {}
+    for e in scene.objects:
+        if "morphkit_vertex" not in e:
+            continue
+        if e.parent != obj and e.get("morphkit_pull_target") != obj.name:
+            continue
+        p = inv @ e.matrix_world.translation
+        out[int(e["morphkit_vertex"])] = (p.x, p.y, p.z)
+    return out
+
+
+def weights_of(obj):
+    return [k.value for k in target_keys(obj)]
+
+
+def solve_into_key(obj, scene):
+    """Solves for the current sliders and pulls and shows the result; returns seconds."""
+    t0 = time.perf_counter()
+    blend, _ = solver_for(obj)
+    w = weights_of(obj)
+    pulls = pulls_of(obj, scene)
+    X = blend.solve(w, pulls=pulls or None)
+    key = geometry.ensure_key(obj, RESULT_KEY)
+    geometry.set_key_coords(key, X)
+    key.value = 1.0
+    key.mute = False
+    for k in target_keys(obj):
+        k.mute = True
+    obj.data.update()
+    _last[obj.name] = (tuple(w), tuple(sorted(pulls.items())))
+    obj["morphkit_last_stats"] = {
+        k: v for k, v in blend.last_stats.items() if isinstance(v, (int, float, bool))
+    }
+    return time.perf_counter() - t0
+
+
+def show_linear(obj):
+    if obj.data.shape_keys is None:
+        return
+    for k in target_keys(obj):
+        k.mute = False
+    key = obj.data.shape_keys.key_blocks.get(RESULT_KEY)
+    if key is not None:
+        key.value = 0.0
+        key.mute = True
+    obj.data.update()
+
+
+def _has_keys(context):
+    obj = context.active_object
+    return (
+        obj is not None
+        and obj.type == "MESH"
+        and obj.data.shape_keys is not None
+        and len(target_keys(obj)) >= 1
+    )
+
+
+class MORPHKIT_OT_physical_update(bpy.types.Operator):
+    """Solve the physical blend for the current shape-key values and pulls"""
+
+    bl_idname = "morphkit.physical_update"
+    bl_label = "Update physical blend"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return _has_keys(context)
+
+    def execute(self, context):
+        import morphkit
+
+        obj = context.active_object
+        try:
+            s = solve_into_key(obj, context.scene)
+        except morphkit.MorphkitError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        obj["morphkit_latency_ms"] = 1e3 * s
+        self.report({"INFO"}, f"physical blend in {1e3 * s:.0f} ms")
+        return {"FINISHED"}
+
+
+class MORPHKIT_OT_physical_linear(bpy.types.Operator):
+    """Show the linear blend of the shape keys again"""
+
+    bl_idname = "morphkit.physical_linear"
+    bl_label = "Show linear blend"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return _has_keys(context)
+
+    def execute(self, context):
+        context.active_object.morphkit_live = False
+        show_linear(context.active_object)
+        return {"FINISHED"}
+
+
+class MORPHKIT_OT_physical_bake(bpy.types.Operator):
+    """Bake the shape-key animation over the scene's frame range as a physical PC2 cache on a
+    Mesh Cache modifier"""
+
+    bl_idname = "morphkit.physical_bake"
+    bl_label = "Bake physical animation (PC2)"
+    bl_options = {"REGISTER", "UNDO"}
+
+    filepath: bpy.props.StringProperty(name="PC2 file", subtype="FILE_PATH", default="")
+    threads: bpy.props.IntProperty(name="Threads", default=2, min=1, max=64)
+
+    @classmethod
+    def poll(cls, context):
+        return _has_keys(context)
+
+    def execute(self, context):
+        import morphkit
+
+        obj, scene = context.active_object, context.scene
+        path = bpy.path.abspath(self.filepath or f"//{bpy.path.clean_name(obj.name)}_physical.pc2")
+        if path.startswith("//"):
+            self.report({"ERROR"}, "save the .blend file first or give an absolute PC2 path")
+            return {"CANCELLED"}
+        show_linear(obj)
+        rows = []
+        current = scene.frame_current
+        for f in range(scene.frame_start, scene.frame_end + 1):
+            scene.frame_set(f)
+            rows.append(weights_of(obj))
+        scene.frame_set(current)
+        try:
+            blend, F = solver_for(obj)
+            frames = blend.solve_many(rows, threads=self.threads)
+            morphkit.write_animation(path, frames, F)
+        except morphkit.MorphkitError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        mod = obj.modifiers.get("morphkit physical") or obj.modifiers.new(
+            "morphkit physical", "MESH_CACHE"
+        )
+        mod.cache_format = "PC2"
+        mod.filepath = path
+        mod.frame_start = scene.frame_start
+        mod.frame_scale = 1.0
+        obj["morphkit_baked_frames"] = len(rows)
+        self.report({"INFO"}, f"baked {len(rows)} frames to {path}")
+        return {"FINISHED"}
+
+
+def _live_handler(scene, depsgraph=None):
+    """Re-solves live objects whose sliders or pulls changed (the slider drives the blend)."""
+    if _busy[0]:
+        return
+    _busy[0] = True
+    try:
+        for obj in scene.objects:
+            if obj.type != "MESH" or not getattr(obj, "morphkit_live", False):
+                continue
+            if obj.data.shape_keys is None:
+                continue
+            state = (tuple(weights_of(obj)), tuple(sorted(pulls_of(obj, scene).items())))
+            if _last.get(obj.name) != state:
+                try:
+                    obj["morphkit_latency_ms"] = 1e3 * solve_into_key(obj, scene)
+                except Exception as e:  # a handler must never raise into Blender
+                    print(f"morphkit: {obj.name}: {e}")
+    finally:
+        _busy[0] = False
+
+
+def _live_changed(self, context):
+    if self.morphkit_live:
+        _last.pop(self.name, None)
+        _live_handler(context.scene)
+    else:
+        show_linear(self)
+
+
+class MORPHKIT_PT_physical(bpy.types.Panel):
+    bl_label = "Physical shape keys"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "morphkit"
+
+    def draw(self, context):
+        layout = self.layout
+        obj = context.active_object
+        if obj is None or obj.type != "MESH":
+            layout.label(text="Select a mesh with shape keys")
+            return
+        layout.prop(obj, "morphkit_live")
+        if obj.data.shape_keys is not None:
+            col = layout.column(align=True)
+            for k in target_keys(obj):
+                col.prop(k, "value", text=k.name, slider=True)
+        row = layout.row(align=True)
+        row.operator(MORPHKIT_OT_physical_update.bl_idname, text="Physical")
+        row.operator(MORPHKIT_OT_physical_linear.bl_idname, text="Linear")
+        layout.operator(MORPHKIT_OT_physical_bake.bl_idname)
+        if "morphkit_latency_ms" in obj:
+            layout.label(text=f"last solve {obj['morphkit_latency_ms']:.0f} ms")
+
+
+classes = (
+    MORPHKIT_OT_physical_update,
+    MORPHKIT_OT_physical_linear,
+    MORPHKIT_OT_physical_bake,
+    MORPHKIT_PT_physical,
+)
+
+
+def register():
+    bpy.types.Object.morphkit_live = bpy.props.BoolProperty(
+        name="Live physical blend",
+        description="Re-solve the physical blend whenever a shape-key value or pull changes",
+        default=False,
+        update=_live_changed,
+    )
+    for c in classes:
+        bpy.utils.register_class(c)
+    bpy.app.handlers.depsgraph_update_post.append(_live_handler)
+    bpy.app.handlers.frame_change_post.append(_live_handler)
+
+
+def unregister():
+    for h in (bpy.app.handlers.depsgraph_update_post, bpy.app.handlers.frame_change_post):
+        if _live_handler in h:
+            h.remove(_live_handler)
+    for c in reversed(classes):
+        bpy.utils.unregister_class(c)
+    del bpy.types.Object.morphkit_live
+    _solvers.clear()
+    _last.clear()

@@ -1,0 +1,283 @@
+"""Headless checks of the add-on, run inside Blender:
+
+    blender -b --factory-startup --python-exit-code 1 --python blender/tests/run_addon_tests.py \
+        -- ADDON.zip DATA_DIR OUT_DIR
+
+Installs and enables the add-on from the zip, builds scenes from real meshes, runs every
+operator and compares the results with the morphkit module within 1e-6 of the bounding-box
+diagonal (Blender stores float32), renders one Workbench image per mode to OUT_DIR and checks
+that it is not blank. Writes OUT_DIR/results.json. Any failed check raises (exit code 1).
+"""
+
+import json
+import pathlib
+import sys
+import time
+
+import bpy
+import numpy as np
+
+argv = sys.argv[sys.argv.index("--") + 1 :]
+ZIP, DATA, OUT = pathlib.Path(argv[0]), pathlib.Path(argv[1]), pathlib.Path(argv[2])
+OUT.mkdir(parents=True, exist_ok=True)
+results = {}
+
+bpy.ops.preferences.addon_install(filepath=str(ZIP), overwrite=True)
+bpy.ops.preferences.addon_enable(module="morphkit_blender")
+import morphkit  # noqa: E402  (found by the add-on: vendored in the zip)
+from morphkit_blender import geometry, physical  # noqa: E402
+
+results["module"] = morphkit.__file__
+
+
+def check(cond, what):
+    if not cond:
+        raise AssertionError(what)
+
+
+def diag(V):
+    return float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+
+
+def new_object(name, V, F, keys=()):
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(V.tolist(), [], F.tolist())
+    mesh.update()
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    if keys:
+        obj.shape_key_add(name="Basis", from_mix=False)
+        for kname, X in keys:
+            k = obj.shape_key_add(name=kname, from_mix=False)
+            geometry.set_key_coords(k, X)
+    return obj
+
+
+def activate(obj):
+    for o in bpy.context.scene.objects:
+        o.select_set(False)
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+
+
+def render(name, obj, color_attr=None):
+    """A Workbench image framing `obj`; returns the pixel standard deviation."""
+    scene = bpy.context.scene
+    for o in scene.objects:
+        o.hide_render = o.type == "MESH" and o != obj
+    cam = bpy.data.objects.get("morphkit_cam")
+    if cam is None:
+        cam = bpy.data.objects.new("morphkit_cam", bpy.data.cameras.new("morphkit_cam"))
+        scene.collection.objects.link(cam)
+    scene.camera = cam
+    bpy.context.view_layer.update()
+    ev = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    pts = np.array([ev.matrix_world @ v.co for v in ev.data.vertices])
+    c = (pts.max(0) + pts.min(0)) / 2
+    r = diag(pts)
+    cam.location = (c[0] + 0.9 * r, c[1] - 1.3 * r, c[2] + 0.7 * r)
+    direction = c - np.array(cam.location)
+    from mathutils import Vector
+
+    cam.rotation_euler = Vector(direction).to_track_quat("-Z", "Y").to_euler()
+    scene.render.engine = "BLENDER_WORKBENCH"
+    scene.display.shading.light = "STUDIO"
+    scene.display.shading.color_type = "VERTEX" if color_attr else "MATERIAL"  # the active colour attribute
+    scene.render.resolution_x, scene.render.resolution_y = 480, 360
+    scene.render.filepath = str(OUT / f"{name}.png")
+    bpy.ops.render.render(write_still=True)
+    img = bpy.data.images.load(scene.render.filepath)
+    px = np.array(img.pixels[:]).reshape(-1, 4)[:, :3]
+    bpy.data.images.remove(img)
+    std = float(px.std())
+    check(std > 0.02, f"{name}.png is blank (pixel std {std})")
+    if color_attr:  # the colour attribute is shown: saturated pixels, not only greys
+        sat = float((px.max(axis=1) - px.min(axis=1)).max())
+        check(sat > 0.3, f"{name}.png shows no colours (max saturation {sat})")
+    return std
+
+
+# --- Physical shape keys ---------------------------------------------------------------
+d = DATA / "cragl-bending-cylinder"
+V0, F = morphkit.read(d / "cylinder-rest.obj")
+V1, _ = morphkit.read(d / "cylinder-bend-4.obj")
+cyl = new_object("cylinder", V0, F, [("bend", V1)])
+activate(cyl)
+key = cyl.data.shape_keys.key_blocks["bend"]
+key.value = 0.5
+check(bpy.ops.morphkit.physical_update() == {"FINISHED"}, "physical_update failed")
+got = geometry.key_coords(cyl.data.shape_keys.key_blocks[physical.RESULT_KEY])
+F_b, _ = geometry.triangles(cyl.data)
+ref = morphkit.PhysicalBlend(geometry.key_coords(cyl.data.shape_keys.key_blocks[0]), [geometry.key_coords(key)], F_b).solve(0.5)
+err = float(np.abs(got - ref).max()) / diag(V0)
+check(err < 1e-6, f"physical shape key differs from the module by {err} of the diagonal")
+results["physical_key_error"] = err
+lin = 0.5 * (V0 + V1)
+results["physical_vs_linear"] = float(np.abs(got - lin).max()) / diag(V0)
+check(results["physical_vs_linear"] > 1e-3, "the physical key equals the linear blend")
+render("physical", cyl)
+
+# Live mode: a slider change re-solves through the depsgraph handler.
+cyl.morphkit_live = True
+key.value = 0.8
+bpy.context.view_layer.update()
+physical._live_handler(bpy.context.scene)
+got = geometry.key_coords(cyl.data.shape_keys.key_blocks[physical.RESULT_KEY])
+err = float(np.abs(got - morphkit.PhysicalBlend(V0, [V1], F_b).solve(0.8)).max()) / diag(V0)
+check(err < 1e-6, f"live update differs by {err}")
+cyl.morphkit_live = False
+
+# A pull: an Empty parented to the mesh holds a free vertex.
+free = int(np.argmax(np.linalg.norm(V1 - V0, axis=1)))  # moves, so not auto-fixed
+goal = got[free] + np.array([0.0, 0.0, 0.05 * diag(V0)])
+empty = bpy.data.objects.new("pull", None)
+bpy.context.scene.collection.objects.link(empty)
+empty.parent = cyl
+empty.location = tuple(goal)
+empty["morphkit_vertex"] = free
+bpy.context.view_layer.update()
+activate(cyl)
+check(bpy.ops.morphkit.physical_update() == {"FINISHED"}, "physical_update with a pull failed")
+got = geometry.key_coords(cyl.data.shape_keys.key_blocks[physical.RESULT_KEY])
+results["pull_error"] = float(np.linalg.norm(got[free] - goal)) / diag(V0)
+check(results["pull_error"] < 1e-4, f"the pulled vertex is {results['pull_error']} away")
+bpy.data.objects.remove(empty)
+
+# Bake a weight animation over the timeline into a PC2 cache on a Mesh Cache modifier.
+scene = bpy.context.scene
+scene.frame_start, scene.frame_end = 1, 5
+for f, v in ((1, 0.0), (5, 1.0)):
+    key.value = v
+    key.keyframe_insert("value", frame=f)
+activate(cyl)
+pc2 = OUT / "cylinder.pc2"
+check(bpy.ops.morphkit.physical_bake(filepath=str(pc2)) == {"FINISHED"}, "bake failed")
+frames, _, _ = morphkit.read_animation(pc2, reference=d / "cylinder-rest.obj")
+check(frames.shape == (5, len(V0), 3), f"baked {frames.shape}")
+check("morphkit physical" in cyl.modifiers, "no Mesh Cache modifier")
+scene.frame_set(3)
+w3 = key.value
+err = float(np.abs(frames[2] - morphkit.PhysicalBlend(V0, [V1], F_b).solve(w3)).max()) / diag(V0)
+check(err < 1e-6, f"baked frame 3 differs by {err}")
+ev = geometry.evaluated_vertices(cyl, bpy.context.evaluated_depsgraph_get())
+err = float(np.abs(ev - frames[2]).max()) / diag(V0)
+check(err < 1e-6, f"the Mesh Cache shows frame 3 off by {err}")
+results["baked_frames"] = int(frames.shape[0])
+cyl.modifiers.remove(cyl.modifiers["morphkit physical"])
+
+# Latency on the horse (8.4k vertices): one slider change to an updated key.
+hc = DATA / "sumner-horse-camel"
+H0, HF = morphkit.read(hc / "horse-reference.obj.gz")
+H5, _ = morphkit.read(hc / "horse-05.obj.gz")
+horse = new_object("horse", H0, HF, [("horse-05", H5)])
+activate(horse)
+horse.data.shape_keys.key_blocks["horse-05"].value = 0.5
+t = time.perf_counter()
+bpy.ops.morphkit.physical_update()  # first: builds the solver
+results["horse_first_update_ms"] = 1e3 * (time.perf_counter() - t)
+horse.data.shape_keys.key_blocks["horse-05"].value = 0.6
+t = time.perf_counter()
+bpy.ops.morphkit.physical_update()
+results["horse_slider_latency_ms"] = 1e3 * (time.perf_counter() - t)
+results["horse_solve_ms"] = 1e3 * horse["morphkit_last_stats"]["seconds"]
+bpy.data.objects.remove(horse)
+
+# --- Transfer and rig transfer: cat -> dog ----------------------------------------------
+cd = DATA / "lowpoly-cat-dog"
+CS, CF = morphkit.read(cd / "cat-reference.obj")
+DT, DF = morphkit.read(cd / "dog-reference.obj")
+run, _, _ = morphkit.read_animation(cd / "cat-run")
+run = 10.0 * run[:4]  # the run is stored at 0.1x the reference scale (SOURCE.md)
+cat = new_object("cat", CS, CF, [(f"run{i}", X) for i, X in enumerate(run)])
+dog = new_object("dog", DT, DF)
+scene.morphkit_source, scene.morphkit_target = cat, dog
+scene.frame_start, scene.frame_end = 1, 4
+for i, k in enumerate(cat.data.shape_keys.key_blocks[1:]):
+    for f in range(1, 5):
+        k.value = 1.0 if f == i + 1 else 0.0
+        k.keyframe_insert("value", frame=f)
+pairs = json.loads((cd / "markers-cat-dog.json").read_text())["pairs"]
+for s, t_ in pairs[:3]:
+    check(bpy.ops.morphkit.add_marker(source_vertex=s, target_vertex=t_) == {"FINISHED"}, "add_marker")
+from morphkit_blender import transfer_ops  # noqa: E402
+
+check(transfer_ops.read_markers(scene) == pairs[:3], "markers text block")
+transfer_ops.write_markers(scene, pairs)
+check(bpy.ops.morphkit.transfer() == {"FINISHED"}, "transfer failed")
+keys = [k for k in dog.data.shape_keys.key_blocks if k.name.startswith(transfer_ops.FRAME_PREFIX)]
+check(len(keys) == 4, f"{len(keys)} frame keys")
+check(dog.data.shape_keys.animation_data.action is not None, "no keyframes on the dog")
+# The module's answer on the same (float32-stored) coordinates that Blender holds.
+DFb, _ = geometry.triangles(dog.data)
+CFb, _ = geometry.triangles(cat.data)
+CS = geometry.key_coords(cat.data.shape_keys.key_blocks[0])
+run = np.stack([geometry.key_coords(k) for k in cat.data.shape_keys.key_blocks[1:]])
+DT = geometry.key_coords(dog.data.shape_keys.key_blocks[0])
+corr = morphkit.Correspondence.from_markers(CS, CFb, DT, DFb, pairs)
+ref = morphkit.Transfer(CS, CFb, DT, DFb, corr).transfer_many(run)
+err = max(float(np.abs(geometry.key_coords(k) - r).max()) for k, r in zip(keys, ref)) / diag(DT)
+check(err < 1e-6, f"transferred frames differ by {err}")
+results["transfer_error"] = err
+scene.frame_set(3)
+ev = geometry.evaluated_vertices(dog, bpy.context.evaluated_depsgraph_get())
+check(float(np.abs(ev - ref[2]).max()) / diag(DT) < 1e-6, "the dog does not show frame 3 at frame 3")
+render("transfer", dog)
+
+check(bpy.ops.morphkit.transfer_rig() == {"FINISHED"}, "transfer_rig failed")
+names = [k.name for k in dog.data.shape_keys.key_blocks]
+check(all(f"run{i}" in names for i in range(4)), f"rig keys {names}")
+rig_ref = morphkit.Transfer(CS, CFb, DT, DFb, corr, translation="fixed").transfer_many(run)
+err = max(
+    float(np.abs(geometry.key_coords(dog.data.shape_keys.key_blocks[f"run{i}"]) - rig_ref[i]).max())
+    for i in range(4)
+) / diag(DT)
+check(err < 1e-6, f"rig keys differ by {err}")
+results["rig_error"] = err
+bpy.data.objects.remove(cat)
+bpy.data.objects.remove(dog)
+
+# --- Synthesis: flexibility colours and intelligent scribbling ---------------------------
+def tube(rings=24, around=10, length=6.0, radius=0.5):
+    V = [[length * r / rings, radius * np.cos(2 * np.pi * k / around), radius * np.sin(2 * np.pi * k / around)]
+         for r in range(rings + 1) for k in range(around)]
+    Fq = []
+    for r in range(rings):
+        for k in range(around):
+            a, b = r * around + k, r * around + (k + 1) % around
+            Fq += [[a, b, b + around], [a, b + around, a + around]]
+    return np.array(V), np.array(Fq)
+
+
+def joint(V, angle, at=3.0):
+    out = V.copy()
+    c, s = np.cos(angle), np.sin(angle)
+    right = V[:, 0] > at
+    dd = V[right] - [at, 0, 0]
+    out[right, 0] = at + c * dd[:, 0] - s * dd[:, 1]
+    out[right, 1] = s * dd[:, 0] + c * dd[:, 1]
+    return out
+
+
+TV, TF = tube()
+arm = new_object("arm", TV, TF, [(f"j{i}", joint(TV, a)) for i, a in enumerate((0.3, 0.6, 0.9))])
+activate(arm)
+check(bpy.ops.morphkit.flexibility() == {"FINISHED"}, "flexibility failed")
+check("morphkit_flexibility" in arm.data.color_attributes, "no flexibility attribute")
+ak = arm.data.shape_keys.key_blocks
+flex = morphkit.flexibility(
+    geometry.key_coords(ak[0]), geometry.triangles(arm.data)[0], [geometry.key_coords(k) for k in ak[1:]]
+)
+check(abs(arm["morphkit_flex_max"] - float(flex.max())) < 1e-9 * float(flex.max()), "flex max")
+render("flexibility", arm, color_attr=True)
+cx = np.array([np.mean([TV[v][0] for v in p.vertices]) for p in arm.data.polygons])
+arm.data.polygons.foreach_set("select", ((cx > 3.8) & (cx < 5.6)).tolist())
+check(bpy.ops.morphkit.refine_scribble() == {"FINISHED"}, "refine_scribble failed")
+sel = np.array([p.select for p in arm.data.polygons])
+check(sel[cx > 4.0].all() and not sel[cx < 2.0].any(), "refined selection is not the right half")
+scribble = json.loads(bpy.data.texts["morphkit_scribble.json"].as_string())
+check(len(scribble["triangles"]) == arm["morphkit_selected_triangles"], "scribble text block")
+render("partitions", arm, color_attr=True)
+results["selected_triangles"] = int(arm["morphkit_selected_triangles"])
+
+(OUT / "results.json").write_text(json.dumps(results, indent=2))
+print("MORPHKIT ADDON TESTS PASSED", json.dumps(results))

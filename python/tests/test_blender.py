@@ -1,0 +1,56 @@
+"""The Blender add-on, headless: builds the add-on zip with this build's module inside, then
+runs blender/tests/run_addon_tests.py in `blender -b` (install, every operator, numerical
+checks against the module, one non-blank Workbench render per mode).
+
+Skipped when no `blender` is on the PATH, unless MORPHKIT_REQUIRE_BLENDER is set (CI), when
+that fails. Needs the real data (MORPHKIT_DATA). Renders and results.json are kept in
+target/blender-test for inspection.
+"""
+
+import json
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+import morphkit
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+
+
+def test_addon_headless(tmp_path, data):
+    exe = shutil.which("blender")
+    if exe is None:
+        if os.environ.get("MORPHKIT_REQUIRE_BLENDER"):
+            pytest.fail("MORPHKIT_REQUIRE_BLENDER is set but no blender is on the PATH")
+        pytest.skip("no blender on the PATH")
+    data_dir = data("cragl-bending-cylinder").parent
+    sys.path.insert(0, str(ROOT / "blender"))
+    import build_addon
+
+    module_root = pathlib.Path(morphkit.__file__).resolve().parents[1]
+    addon = build_addon.build(tmp_path / "morphkit_blender.zip", module_root)
+    out = ROOT / "target" / "blender-test"
+    shutil.rmtree(out, ignore_errors=True)
+    env = dict(os.environ)
+    # Install into a throwaway user profile, not the user's own Blender configuration.
+    env["BLENDER_USER_SCRIPTS"] = str(tmp_path / "scripts")
+    env["BLENDER_USER_CONFIG"] = str(tmp_path / "config")
+    env.pop("PYTHONPATH", None)  # the add-on must find its vendored module by itself
+    r = subprocess.run(
+        [exe, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
+         str(ROOT / "blender" / "tests" / "run_addon_tests.py"), "--",
+         str(addon), str(data_dir), str(out)],
+        capture_output=True, text=True, env=env, timeout=900,
+    )
+    assert r.returncode == 0 and "MORPHKIT ADDON TESTS PASSED" in r.stdout, (
+        r.stdout[-4000:] + r.stderr[-4000:]
+    )
+    results = json.loads((out / "results.json").read_text())
+    assert "vendor" in results["module"]
+    assert results["physical_key_error"] < 1e-6 and results["transfer_error"] < 1e-6
+    for png in ("physical", "transfer", "flexibility", "partitions"):
+        assert (out / f"{png}.png").stat().st_size > 1000
