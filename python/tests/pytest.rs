@@ -1,6 +1,7 @@
 //! Runs the Python test suite (`python/tests/test_*.py`, pytest) against the extension module
 //! that this `cargo test` built (`target/<profile>/deps/lib_morphkit.so`), in a virtual environment
-//! under `target/python-venv` that it creates itself (numpy, pytest and libigl from PyPI).
+//! under `target/python-venv` that it creates itself (`tests/requirements.txt`: numpy, pytest,
+//! Dask; and libigl for cross-checks, all from PyPI).
 //!
 //! Without a usable `python3` (or `MORPHKIT_PYTHON`) or without network for the first set-up
 //! the suite is skipped with a message, unless `MORPHKIT_REQUIRE_PYTHON` is set (CI sets it),
@@ -39,37 +40,34 @@ fn run(cmd: &mut Command) -> Result<(), String> {
     }
 }
 
-/// Creates the virtual environment once (a marker file records a complete set-up).
-fn venv(target: &Path) -> Result<PathBuf, String> {
+/// Creates the virtual environment with `tests/requirements.txt` (numpy, pytest, Dask), and
+/// libigl when it installs; a marker file holding the requirements records a complete set-up,
+/// so a changed list installs again.
+fn venv(target: &Path, src: &Path) -> Result<PathBuf, String> {
     let dir = target.join("python-venv");
     let python = dir.join("bin").join("python");
     let done = dir.join(".morphkit-ready");
-    if done.exists() && python.exists() {
+    let reqs = src.join("tests").join("requirements.txt");
+    let wanted = std::fs::read_to_string(&reqs).map_err(|e| format!("{}: {e}", reqs.display()))?;
+    if python.exists() && std::fs::read_to_string(&done).is_ok_and(|d| d == wanted) {
         return Ok(python);
     }
-    let host = std::env::var("MORPHKIT_PYTHON").unwrap_or_else(|_| "python3".into());
-    run(Command::new(&host).args(["-m", "venv"]).arg(&dir))?;
-    run(Command::new(&python).args([
-        "-m",
-        "pip",
-        "install",
-        "-q",
-        "--disable-pip-version-check",
-        "numpy",
-        "pytest",
-    ]))?;
+    if !python.exists() {
+        let host = std::env::var("MORPHKIT_PYTHON").unwrap_or_else(|_| "python3".into());
+        run(Command::new(&host).args(["-m", "venv"]).arg(&dir))?;
+    }
+    let pip = |args: &[&str]| {
+        let mut c = Command::new(&python);
+        c.args(["-m", "pip", "install", "-q", "--disable-pip-version-check"])
+            .args(args);
+        run(&mut c)
+    };
+    pip(&["-r", reqs.to_str().ok_or("non-UTF-8 path")?])?;
     // libigl is for numerical cross-checks only; its absence skips those tests.
-    if let Err(e) = run(Command::new(&python).args([
-        "-m",
-        "pip",
-        "install",
-        "-q",
-        "--disable-pip-version-check",
-        "libigl",
-    ])) {
+    if let Err(e) = pip(&["libigl"]) {
         eprintln!("libigl not installed ({e}); its cross-checks will be skipped");
     }
-    std::fs::write(&done, b"ok\n").map_err(|e| e.to_string())?;
+    std::fs::write(&done, wanted).map_err(|e| e.to_string())?;
     Ok(python)
 }
 
@@ -104,7 +102,7 @@ fn python_suite() {
     let src = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let profile = profile_dir();
     let target = profile.parent().expect("target dir").to_path_buf();
-    let python = match venv(&target) {
+    let python = match venv(&target, &src) {
         Ok(p) => p,
         Err(e) => return skip_or_fail(&format!("the virtual environment failed: {e}")),
     };
