@@ -116,5 +116,5 @@ def test_geodesic_distance_matches_libigl_exact():
     )
     far = exact > 0.25 * exact.max()
     # The heat method (Crane et al. 2013) at the default time step is within a few percent.
-    assert np.abs(d[far] / exact[far] - 1).max() < 0.1
+    assert np.abs(d[far] / exact[far] - 1).max() < 0.15  # measured 0.090, mean 0.0096
     assert np.abs(d[far] / exact[far] - 1).mean() < 0.03
