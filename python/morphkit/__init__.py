@@ -15,8 +15,10 @@ are also :class:`OSError`. Solves release the GIL.
 from ._errors import BlendError, FileError, MeshError, MorphkitError, TransferError
 from ._morphkit import (
     Correspondence,
+    Obstacle,
     Partitions,
     PhysicalBlend,
+    SceneBlend,
     Transfer,
     __version__,
     flexibility,
@@ -37,8 +39,10 @@ __all__ = [
     "FileError",
     "MeshError",
     "MorphkitError",
+    "Obstacle",
     "Partitions",
     "PhysicalBlend",
+    "SceneBlend",
     "Transfer",
     "TransferError",
     "__version__",

@@ -122,3 +122,37 @@ class Partitions:
         self, *, triangles: Optional[Sequence[int]] = None, vertices: Optional[Sequence[int]] = None
     ) -> npt.NDArray[np.bool_]: ...
     def blend_weights(self, selection: ArrayLike, *, kappa: float = 1e4) -> npt.NDArray[np.float64]: ...
+
+Key = Union[Tuple[float, Sequence[float]], Tuple[float, Sequence[float], Sequence[float]]]
+
+class Obstacle:
+    @staticmethod
+    def sphere(radius: float, *, name: str = "sphere", keys: Optional[Sequence[Key]] = None) -> "Obstacle": ...
+    @staticmethod
+    def box(size: Sequence[float], *, name: str = "box", keys: Optional[Sequence[Key]] = None) -> "Obstacle": ...
+    @staticmethod
+    def cylinder(
+        radius: float, height: float, *, name: str = "cylinder", keys: Optional[Sequence[Key]] = None
+    ) -> "Obstacle": ...
+    @staticmethod
+    def mesh(v: ArrayLike, f: ArrayLike, *, name: str = "mesh", keys: Optional[Sequence[Key]] = None) -> "Obstacle": ...
+    @property
+    def name(self) -> str: ...
+
+class SceneBlend:
+    def __init__(
+        self,
+        base: ArrayLike,
+        targets: Union[ArrayLike, Sequence[ArrayLike]],
+        faces: ArrayLike,
+        *,
+        obstacles: Sequence[Obstacle] = (),
+        pulls: Sequence[Tuple[int, Sequence[Tuple[float, Sequence[float]]]]] = (),
+        fixed: Union[None, str, Sequence[int]] = None,
+        hinge_weight: Optional[float] = None,
+        tolerance: float = 1e-4,
+        max_rounds: int = 10,
+    ) -> None: ...
+    def solve(self, weights: Union[float, Sequence[float]], *, frame: float = 0.0, convex: bool = False) -> Vertices: ...
+    @property
+    def last_stats(self) -> Optional[Dict[str, Any]]: ...

@@ -30,7 +30,7 @@ pub struct PyPhysicalBlend {
     last: Option<FrameStats>,
 }
 
-fn fixed_vertices(obj: Option<&Bound<'_, PyAny>>) -> PyResult<FixedVertices> {
+pub fn fixed_vertices(obj: Option<&Bound<'_, PyAny>>) -> PyResult<FixedVertices> {
     let Some(obj) = obj else {
         return Ok(FixedVertices::Auto);
     };
@@ -60,7 +60,7 @@ fn fixed_vertices(obj: Option<&Bound<'_, PyAny>>) -> PyResult<FixedVertices> {
     Ok(FixedVertices::Ids(ids))
 }
 
-fn weights(obj: &Bound<'_, PyAny>, convex: bool, targets: usize) -> PyResult<Weights> {
+pub fn weights(obj: &Bound<'_, PyAny>, convex: bool, targets: usize) -> PyResult<Weights> {
     let w: Vec<f64> = match obj.extract::<f64>() {
         Ok(a) if !convex && targets == 1 => vec![a],
         Ok(_) => {

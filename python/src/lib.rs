@@ -10,6 +10,7 @@ mod errors;
 mod io;
 mod mesh;
 mod metrics;
+mod scene;
 mod synth;
 mod transfer;
 
@@ -30,6 +31,8 @@ fn _morphkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(synth::synthesize, m)?)?;
     m.add_class::<synth::PyPartitions>()?;
     m.add_class::<blend::PyPhysicalBlend>()?;
+    m.add_class::<scene::PyObstacle>()?;
+    m.add_class::<scene::PySceneBlend>()?;
     m.add_class::<transfer::PyCorrespondence>()?;
     m.add_class::<transfer::PyTransfer>()?;
     Ok(())

@@ -1,0 +1,242 @@
+//! Physical blends in a scene (Ma et al. 2012, Sec. 4): rigid obstacles with keyframed motion
+//! and keyframed pulls, through the library's `scene::SceneBlend`.
+
+use crate::arrays;
+use crate::arrays::to_array;
+use crate::dict::to_dict;
+use crate::errors::{new_err, IntoPyResult, Kind};
+use crate::mesh::from_arrays;
+use morphkit::mesh::ShapeSet;
+use morphkit::scene::{
+    CollisionOptions, Obstacle, Primitive, Pull, PullKey, PullKind, RigidKey, Rotation, SceneBlend,
+    SceneFrame,
+};
+use morphkit::springs::{BlendOptions, Weights};
+use numpy::PyArray2;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// A rigid obstacle: a primitive or a closed mesh, with an optional keyframed rigid motion
+/// `keys = [(frame, (tx, ty, tz)), …]` or `[(frame, (tx, ty, tz), (w, x, y, z)), …]` (frames
+/// strictly increasing; poses interpolated between keys, held outside).
+///
+/// >>> ball = morphkit.Obstacle.sphere(0.3, keys=[(0, (1, 0, 0)), (10, (1, 0.5, 0))])
+#[pyclass(name = "Obstacle", module = "morphkit", frozen)]
+pub struct PyObstacle {
+    inner: Obstacle,
+}
+
+type Key = (f64, [f64; 3], Option<[f64; 4]>);
+
+/// `(frame, translation)` or `(frame, translation, (w, x, y, z))`.
+fn key_of(obj: &Bound<'_, PyAny>) -> PyResult<Key> {
+    if let Ok((f, t)) = obj.extract::<(f64, [f64; 3])>() {
+        return Ok((f, t, None));
+    }
+    obj.extract::<(f64, [f64; 3], [f64; 4])>()
+        .map(|(f, t, q)| (f, t, Some(q)))
+        .map_err(|_| {
+            new_err(
+                Kind::Blend,
+                "keys: each key is (frame, (tx, ty, tz)) or (frame, (tx, ty, tz), (w, x, y, z))",
+            )
+        })
+}
+
+fn keyed(o: Obstacle, keys: Option<Vec<Bound<'_, PyAny>>>) -> PyResult<PyObstacle> {
+    let inner = match keys {
+        None => o,
+        Some(keys) => {
+            let keys = keys
+                .iter()
+                .map(key_of)
+                .collect::<PyResult<Vec<Key>>>()?
+                .into_iter()
+                .map(|(frame, translation, q)| {
+                    let [w, x, y, z] = q.unwrap_or([1.0, 0.0, 0.0, 0.0]);
+                    RigidKey {
+                        frame,
+                        translation,
+                        rotation: Rotation::from_xyzw(x, y, z, w).normalize(),
+                    }
+                })
+                .collect();
+            o.with_keys(keys).py(Kind::Blend)?
+        }
+    };
+    Ok(PyObstacle { inner })
+}
+
+#[pymethods]
+impl PyObstacle {
+    /// A sphere of `radius` centred at the origin of its pose.
+    #[staticmethod]
+    #[pyo3(signature = (radius, *, name="sphere", keys=None))]
+    fn sphere(radius: f64, name: &str, keys: Option<Vec<Bound<'_, PyAny>>>) -> PyResult<Self> {
+        let o = Obstacle::primitive(name, &Primitive::Sphere { radius }, 1.0).py(Kind::Blend)?;
+        keyed(o, keys)
+    }
+
+    /// An axis-aligned box of `size` (x, y, z) centred at the origin of its pose.
+    #[staticmethod]
+    #[pyo3(signature = (size, *, name="box", keys=None))]
+    fn r#box(size: [f64; 3], name: &str, keys: Option<Vec<Bound<'_, PyAny>>>) -> PyResult<Self> {
+        let o = Obstacle::primitive(name, &Primitive::Box { size }, 1.0).py(Kind::Blend)?;
+        keyed(o, keys)
+    }
+
+    /// A cylinder of `radius` and `height` along its pose's y axis, centred at its origin.
+    #[staticmethod]
+    #[pyo3(signature = (radius, height, *, name="cylinder", keys=None))]
+    fn cylinder(
+        radius: f64,
+        height: f64,
+        name: &str,
+        keys: Option<Vec<Bound<'_, PyAny>>>,
+    ) -> PyResult<Self> {
+        let o = Obstacle::primitive(name, &Primitive::Cylinder { radius, height }, 1.0)
+            .py(Kind::Blend)?;
+        keyed(o, keys)
+    }
+
+    /// A closed, consistently oriented triangle mesh `(V, F)` (an open mesh has no inside and
+    /// is refused).
+    #[staticmethod]
+    #[pyo3(signature = (v, f, *, name="mesh", keys=None))]
+    fn mesh(
+        v: &Bound<'_, PyAny>,
+        f: &Bound<'_, PyAny>,
+        name: &str,
+        keys: Option<Vec<Bound<'_, PyAny>>>,
+    ) -> PyResult<Self> {
+        let m = from_arrays("obstacle", v, f)?;
+        let o = Obstacle::from_mesh(name, &m).py(Kind::Blend)?;
+        keyed(o, keys)
+    }
+
+    /// The obstacle's name.
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name().to_string()
+    }
+
+    fn __repr__(&self) -> String {
+        format!("Obstacle({:?})", self.inner.name())
+    }
+}
+
+/// A physical blend with obstacles and keyframed pulls, built once; :meth:`solve` is one frame
+/// (Ma et al. Sec. 4: after each equilibrium, surface vertices inside an obstacle are moved to
+/// its surface, held there, and the blend is solved again, until nothing penetrates by more
+/// than `tolerance` × the diagonal or `max_rounds` re-solves were made).
+///
+/// `pulls = [(vertex, [(frame, (x, y, z)), …]), …]` are hard pulls (the vertex's part must be
+/// held by fixed vertices). Other arguments as :class:`PhysicalBlend`.
+#[pyclass(name = "SceneBlend", module = "morphkit")]
+pub struct PySceneBlend {
+    inner: SceneBlend,
+    targets: usize,
+    last: Option<SceneFrame>,
+}
+
+#[pymethods]
+impl PySceneBlend {
+    #[new]
+    #[pyo3(signature = (base, targets, faces, *, obstacles=Vec::new(), pulls=Vec::new(),
+        fixed=None, hinge_weight=None, tolerance=1e-4, max_rounds=10))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        base: &Bound<'_, PyAny>,
+        targets: &Bound<'_, PyAny>,
+        faces: &Bound<'_, PyAny>,
+        obstacles: Vec<Bound<'_, PyObstacle>>,
+        pulls: Vec<(u32, Vec<(f64, [f64; 3])>)>,
+        fixed: Option<&Bound<'_, PyAny>>,
+        hinge_weight: Option<f64>,
+        tolerance: f64,
+        max_rounds: usize,
+    ) -> PyResult<Self> {
+        let mesh = from_arrays("base", base, faces)?;
+        let n = mesh.num_vertices();
+        let targets = arrays::frames("targets", targets, Some(n))?;
+        if targets.is_empty() {
+            return Err(new_err(
+                Kind::Blend,
+                "targets: at least one target is needed",
+            ));
+        }
+        let k = targets.len();
+        let mut named = vec![("base".to_string(), mesh.positions.clone())];
+        named.extend(
+            targets
+                .into_iter()
+                .enumerate()
+                .map(|(i, p)| (format!("target_{i}"), p)),
+        );
+        let shapes = ShapeSet::new(mesh, named).py(Kind::Mesh)?;
+        let mut opts = BlendOptions {
+            fixed: crate::blend::fixed_vertices(fixed)?,
+            ..BlendOptions::default()
+        };
+        if let Some(w) = hinge_weight {
+            opts.hinges.weight = w;
+        }
+        let pulls = pulls
+            .into_iter()
+            .map(|(v, keys)| {
+                let keys = keys
+                    .into_iter()
+                    .map(|(frame, position)| PullKey { frame, position })
+                    .collect();
+                Pull::new(v, keys, PullKind::Hard).py(Kind::Blend)
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        let obstacles = obstacles.iter().map(|o| o.get().inner.clone()).collect();
+        let col = CollisionOptions {
+            tolerance,
+            max_rounds,
+        };
+        let inner = py
+            .detach(|| SceneBlend::new(&shapes, &opts, obstacles, pulls, &col))
+            .py(Kind::Blend)?;
+        Ok(Self {
+            inner,
+            targets: k,
+            last: None,
+        })
+    }
+
+    /// The frame at frame number `frame` (it places obstacles and pulls) for `weights` (as in
+    /// :meth:`PhysicalBlend.solve`): a new `(n, 3)` array. The GIL is released.
+    #[pyo3(signature = (weights, *, frame=0.0, convex=false))]
+    fn solve<'py>(
+        &mut self,
+        py: Python<'py>,
+        weights: &Bound<'py, PyAny>,
+        frame: f64,
+        convex: bool,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let w: Weights = crate::blend::weights(weights, convex, self.targets)?;
+        let inner = &mut self.inner;
+        let r = py.detach(|| inner.solve(frame, &w)).py(Kind::Blend)?;
+        let out = to_array(py, &r.positions);
+        self.last = Some(r);
+        Ok(out)
+    }
+
+    /// The last frame's statistics: `solver` (as :attr:`PhysicalBlend.last_stats`),
+    /// `collision` (contacts, rounds, max_penetration, tolerance, resolved, timings) and
+    /// `contacts` (vertex, obstacle, position, depth), or `None` before the first solve.
+    #[getter]
+    fn last_stats<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(r) = &self.last else {
+            return Ok(None);
+        };
+        let d = PyDict::new(py);
+        d.set_item("solver", to_dict(py, &r.solver)?)?;
+        d.set_item("collision", to_dict(py, &r.collision)?)?;
+        d.set_item("contacts", to_dict(py, &r.contacts)?)?;
+        Ok(Some(d))
+    }
+}

@@ -1,0 +1,68 @@
+"""SceneBlend: obstacles (Ma et al. Fig. 2 analogue) and keyed pulls, with bad input refused."""
+
+import numpy as np
+import pytest
+
+import morphkit
+from conftest import data_file, diag, grid, tube
+
+
+@pytest.fixture(scope="module")
+def cylinder():
+    d = data_file("cragl-bending-cylinder")
+    V0, F = morphkit.read(d / "cylinder-rest.obj")
+    V1, _ = morphkit.read(d / "cylinder-bend-4.obj")
+    return V0, V1, F
+
+
+def test_bar_in_the_path_is_not_penetrated(cylinder):
+    V0, V1, F = cylinder
+    bar = morphkit.Obstacle.cylinder(0.2, 2.0, name="bar", keys=[(0, (1.35, 0.0, 0.95))])
+    scene = morphkit.SceneBlend(V0, [V1], F, obstacles=[bar])
+    free = morphkit.PhysicalBlend(V0, [V1], F)
+    d = diag(V0)
+    touched = 0
+    for a in (0.0, 0.5, 1.0):
+        x = scene.solve(a)
+        s = scene.last_stats
+        assert s["collision"]["resolved"] and s["collision"]["max_penetration"] <= 1e-4 * d
+        # Inside test of the bar (axis along y through (1.35, ·, 0.95)): nothing deeper.
+        r = np.hypot(x[:, 0] - 1.35, x[:, 2] - 0.95)
+        inside = (r < 0.2 - 1e-4 * d) & (np.abs(x[:, 1]) < 1.0)
+        assert not inside.any()
+        touched += s["collision"]["contacts"]
+        if s["collision"]["contacts"] == 0:
+            assert np.abs(x - free.solve(a)).max() <= 1e-12 * d
+    assert touched > 0
+
+
+def test_far_obstacle_changes_nothing(cylinder):
+    V0, V1, F = cylinder
+    far = morphkit.Obstacle.sphere(0.1, keys=[(0, (50.0, 50.0, 50.0))])
+    scene = morphkit.SceneBlend(V0, [V1], F, obstacles=[far])
+    x = scene.solve(0.7)
+    assert scene.last_stats["collision"]["contacts"] == 0
+    assert np.abs(x - morphkit.PhysicalBlend(V0, [V1], F).solve(0.7)).max() <= 1e-12 * diag(V0)
+
+
+def test_keyed_pull_follows_its_keys():
+    V, F = grid(8)
+    fixed = [i for i in range(len(V)) if V[i, 0] <= 1.0]
+    tip = int(np.argmax(V[:, 0] + 1e-3 * V[:, 1]))
+    keys = [(0.0, tuple(V[tip])), (10.0, tuple(V[tip] + [0, 0, 2.0]))]
+    scene = morphkit.SceneBlend(V, [V.copy()], F, pulls=[(tip, keys)], fixed=fixed)
+    for frame, lift in ((0.0, 0.0), (5.0, 1.0), (10.0, 2.0)):
+        x = scene.solve(0.0, frame=frame)
+        assert np.linalg.norm(x[tip] - (V[tip] + [0, 0, lift])) < 1e-3
+
+
+def test_bad_scene_input():
+    V, F = tube(6, 6)
+    with pytest.raises(morphkit.BlendError):
+        morphkit.Obstacle.sphere(-1.0)
+    with pytest.raises(morphkit.BlendError):
+        morphkit.Obstacle.sphere(1.0, keys=[(5, (0, 0, 0)), (1, (0, 0, 0))])  # out of order
+    with pytest.raises(morphkit.BlendError):
+        morphkit.Obstacle.mesh(V, F)  # an open tube has no inside
+    with pytest.raises(morphkit.BlendError):
+        morphkit.SceneBlend(V, [V], F, pulls=[(len(V) + 5, [(0.0, (0, 0, 0))])])
