@@ -6,6 +6,8 @@ keys are muted, so the viewport shows it; the linear mode unmutes them again. Th
 built once per mesh and set of keys, then every slider change is one cheap solve. Pulls are
 objects (Empties) with a custom property `morphkit_vertex` (a vertex id), parented to the mesh
 or naming it in `morphkit_pull_target`: the vertex is held at the Empty's position (Fig. 5).
+Obstacles are closed mesh objects with a custom property `morphkit_obstacle` (true): the blend
+collides with them (Fig. 2; the solver is rebuilt when an obstacle moves).
 """
 
 import time
@@ -21,25 +23,55 @@ _last = {}  # object name -> weights and pulls last solved
 _busy = [False]
 
 
+def morphkit_module():
+    import morphkit
+
+    return morphkit
+
+
 def target_keys(obj):
     keys = obj.data.shape_keys.key_blocks
     return [k for k in keys[1:] if k.name != RESULT_KEY]
 
 
-def _signature(obj):
+def obstacles_of(scene, obj):
+    """Obstacle objects of the scene (closed meshes with `morphkit_obstacle` set)."""
+    return [
+        o for o in scene.objects
+        if o.type == "MESH" and o != obj and bool(o.get("morphkit_obstacle", False))
+    ]
+
+
+def _obstacle(o, obj):
+    """`o` as a morphkit Obstacle in `obj`'s object space."""
+    import morphkit
+
+    F, _ = geometry.triangles(o.data)
+    V = geometry.vertices(o.data)
+    m = np.array(obj.matrix_world.inverted() @ o.matrix_world)
+    V = V @ m[:3, :3].T + m[:3, 3]
+    return morphkit.Obstacle.mesh(V, F, name=o.name)
+
+
+def _signature(obj, scene=None):
     keys = obj.data.shape_keys.key_blocks
     digest = [len(obj.data.vertices), len(obj.data.polygons), keys[0].name]
+    if scene is not None:
+        for o in obstacles_of(scene, obj):
+            digest.append((o.name, tuple(np.array(o.matrix_world).ravel()), len(o.data.vertices)))
+        digest.append(tuple(np.array(obj.matrix_world).ravel()))
     for k in target_keys(obj):
         c = geometry.key_coords(k)
         digest.append((k.name, float(c.sum()), float(np.abs(c).sum())))
     return tuple(digest)
 
 
-def solver_for(obj):
-    """The cached PhysicalBlend of `obj`, rebuilt when its keys or topology changed."""
+def solver_for(obj, scene=None):
+    """The cached PhysicalBlend of `obj` (a SceneBlend when `scene` has obstacles), rebuilt when
+    its keys, topology or obstacles changed."""
     import morphkit
 
-    sig = _signature(obj)
+    sig = _signature(obj, scene)
     cached = _solvers.get(obj.name)
     if cached is not None and cached[0] == sig:
         return cached[1], cached[2]
@@ -47,7 +79,11 @@ def solver_for(obj):
     F, _ = geometry.triangles(obj.data)
     base = geometry.key_coords(keys[0])
     targets = [geometry.key_coords(k) for k in target_keys(obj)]
-    blend = morphkit.PhysicalBlend(base, targets, F)
+    obstacles = [_obstacle(o, obj) for o in obstacles_of(scene, obj)] if scene else []
+    if obstacles:
+        blend = morphkit.SceneBlend(base, targets, F, obstacles=obstacles)
+    else:
+        blend = morphkit.PhysicalBlend(base, targets, F)
     _solvers[obj.name] = (sig, blend, F)
     return blend, F
 
@@ -73,10 +109,18 @@ def weights_of(obj):
 def solve_into_key(obj, scene):
     """Solves for the current sliders and pulls and shows the result; returns seconds."""
     t0 = time.perf_counter()
-    blend, _ = solver_for(obj)
+    blend, _ = solver_for(obj, scene)
     w = weights_of(obj)
     pulls = pulls_of(obj, scene)
-    X = blend.solve(w, pulls=pulls or None)
+    if isinstance(blend, morphkit_module().SceneBlend):
+        if pulls:
+            raise morphkit_module().BlendError("pulls and obstacles together are not supported yet")
+        X = blend.solve(w)
+        stats = blend.last_stats["solver"]
+        obj["morphkit_contacts"] = blend.last_stats["collision"]["contacts"]
+    else:
+        X = blend.solve(w, pulls=pulls or None)
+        stats = blend.last_stats
     key = geometry.ensure_key(obj, RESULT_KEY)
     geometry.set_key_coords(key, X)
     key.value = 1.0
@@ -86,7 +130,7 @@ def solve_into_key(obj, scene):
     obj.data.update()
     _last[obj.name] = (tuple(w), tuple(sorted(pulls.items())))
     obj["morphkit_last_stats"] = {
-        k: v for k, v in blend.last_stats.items() if isinstance(v, (int, float, bool))
+        k: v for k, v in stats.items() if isinstance(v, (int, float, bool))
     }
     return time.perf_counter() - t0
 
@@ -186,8 +230,11 @@ class MORPHKIT_OT_physical_bake(bpy.types.Operator):
             rows.append(weights_of(obj))
         scene.frame_set(current)
         try:
-            blend, F = solver_for(obj)
-            frames = blend.solve_many(rows, threads=self.threads)
+            blend, F = solver_for(obj, scene)
+            if isinstance(blend, morphkit.SceneBlend):
+                frames = np.stack([blend.solve(w) for w in rows])
+            else:
+                frames = blend.solve_many(rows, threads=self.threads)
             morphkit.write_animation(path, frames, F)
         except morphkit.MorphkitError as e:
             self.report({"ERROR"}, str(e))

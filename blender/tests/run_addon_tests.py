@@ -60,11 +60,11 @@ def activate(obj):
     bpy.context.view_layer.objects.active = obj
 
 
-def render(name, obj, color_attr=None):
-    """A Workbench image framing `obj`; returns the pixel standard deviation."""
+def render(name, obj, color_attr=None, also=()):
+    """A Workbench image framing `obj` (and showing `also`); returns the pixel std."""
     scene = bpy.context.scene
     for o in scene.objects:
-        o.hide_render = o.type == "MESH" and o != obj
+        o.hide_render = o.type == "MESH" and o != obj and o not in also
     cam = bpy.data.objects.get("morphkit_cam")
     if cam is None:
         cam = bpy.data.objects.new("morphkit_cam", bpy.data.cameras.new("morphkit_cam"))
@@ -164,6 +164,37 @@ err = float(np.abs(ev - frames[2]).max()) / diag(V0)
 check(err < 1e-6, f"the Mesh Cache shows frame 3 off by {err}")
 results["baked_frames"] = int(frames.shape[0])
 cyl.modifiers.remove(cyl.modifiers["morphkit physical"])
+
+# An obstacle in the bending half's path (Fig. 2): a closed mesh object with morphkit_obstacle.
+key.animation_data_clear() if hasattr(key, "animation_data_clear") else None
+cyl.data.shape_keys.animation_data_clear()
+bar_mesh = bpy.data.meshes.new("bar")
+import bmesh  # noqa: E402
+
+bm = bmesh.new()
+bmesh.ops.create_cone(bm, cap_ends=True, segments=24, radius1=0.2, radius2=0.2, depth=2.0)
+bm.to_mesh(bar_mesh)
+bm.free()
+bar = bpy.data.objects.new("bar", bar_mesh)
+bpy.context.scene.collection.objects.link(bar)
+bar.rotation_euler = (np.pi / 2, 0.0, 0.0)  # cone axis z -> y, as the example scene's bar
+bar.location = (1.35, 0.0, 0.95)
+bar["morphkit_obstacle"] = True
+bpy.context.view_layer.update()
+key.value = 1.0
+activate(cyl)
+check(bpy.ops.morphkit.physical_update() == {"FINISHED"}, "physical_update with an obstacle failed")
+got = geometry.key_coords(cyl.data.shape_keys.key_blocks[physical.RESULT_KEY])
+check(cyl["morphkit_contacts"] > 0, "the bar is not touched")
+Vb = geometry.vertices(bar_mesh)
+mw = np.array(bar.matrix_world)
+obst = morphkit.Obstacle.mesh(Vb @ mw[:3, :3].T + mw[:3, 3], geometry.triangles(bar_mesh)[0])
+sb = morphkit.SceneBlend(V0, [V1], F_b, obstacles=[obst])
+err = float(np.abs(got - sb.solve(1.0)).max()) / diag(V0)
+check(err < 1e-6, f"the obstacle blend differs from the module by {err}")
+results["obstacle_contacts"] = int(cyl["morphkit_contacts"])
+render("obstacle", cyl, also=[bar])
+bpy.data.objects.remove(bar)
 
 # Latency on the horse (8.4k vertices): one slider change to an updated key.
 hc = DATA / "sumner-horse-camel"
