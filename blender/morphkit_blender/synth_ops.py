@@ -100,6 +100,45 @@ class MORPHKIT_OT_refine_scribble(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class MORPHKIT_OT_rotate_partition(bpy.types.Operator):
+    """Pose modification (Sec. 3.2.4): turn the scribbled (selected) partitions about `axis`
+    by `angle`; the joints blend and the other stiff parts stay. The edited pose goes into the
+    shape key `morphkit_pose`"""
+
+    bl_idname = "morphkit.rotate_partition"
+    bl_label = "Rotate selected partition"
+    bl_options = {"REGISTER", "UNDO"}
+
+    axis: bpy.props.FloatVectorProperty(name="Axis", size=3, default=(0.0, 0.0, 1.0))
+    angle: bpy.props.FloatProperty(name="Angle", subtype="ANGLE", default=0.5)
+
+    def execute(self, context):
+        import morphkit
+
+        obj = context.active_object
+        was_edit = obj.mode == "EDIT"
+        if was_edit:
+            bpy.ops.object.mode_set(mode="OBJECT")
+        try:
+            base, F, P, flex = flexibility_of(obj)
+            selected_polys = np.array([p.select for p in obj.data.polygons])
+            mask = selected_polys[P]
+            if not mask.any():
+                raise ValueError("select the faces of the part to turn first")
+            parts = morphkit.Partitions(base, F, flex)
+            X = parts.edit_pose(mask, tuple(self.axis), self.angle)
+        except (ValueError, morphkit.MorphkitError) as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        key = geometry.ensure_key(obj, "morphkit_pose")
+        geometry.set_key_coords(key, X)
+        key.value = 1.0
+        obj.data.update()
+        if was_edit:
+            bpy.ops.object.mode_set(mode="EDIT")
+        return {"FINISHED"}
+
+
 class MORPHKIT_OT_synthesize(bpy.types.Operator):
     """Run a synthesis recipe (the TOML file of `morphkit synth`) and put its frames on the
     active object as keyed shape keys"""
@@ -138,10 +177,17 @@ class MORPHKIT_PT_synth(bpy.types.Panel):
         layout = self.layout
         layout.operator(MORPHKIT_OT_flexibility.bl_idname)
         layout.operator(MORPHKIT_OT_refine_scribble.bl_idname)
+        layout.operator(MORPHKIT_OT_rotate_partition.bl_idname)
         layout.operator(MORPHKIT_OT_synthesize.bl_idname)
 
 
-classes = (MORPHKIT_OT_flexibility, MORPHKIT_OT_refine_scribble, MORPHKIT_OT_synthesize, MORPHKIT_PT_synth)
+classes = (
+    MORPHKIT_OT_flexibility,
+    MORPHKIT_OT_refine_scribble,
+    MORPHKIT_OT_rotate_partition,
+    MORPHKIT_OT_synthesize,
+    MORPHKIT_PT_synth,
+)
 
 
 def register():

@@ -310,5 +310,19 @@ check(len(scribble["triangles"]) == arm["morphkit_selected_triangles"], "scribbl
 render("partitions", arm, color_attr=True)
 results["selected_triangles"] = int(arm["morphkit_selected_triangles"])
 
+# Pose modification: turn the selected (right) part by 0.6 rad about z.
+check(bpy.ops.morphkit.rotate_partition(axis=(0, 0, 1), angle=0.6) == {"FINISHED"}, "rotate_partition")
+posed = geometry.key_coords(arm.data.shape_keys.key_blocks["morphkit_pose"])
+Fa, Pa = geometry.triangles(arm.data)
+base_a = geometry.key_coords(ak[0])
+parts = morphkit.Partitions(base_a, Fa, flex)
+ref_pose = parts.edit_pose(sel[Pa], (0.0, 0.0, 1.0), 0.6)
+err = float(np.abs(posed - ref_pose).max()) / diag(TV)
+check(err < 1e-6, f"posed key differs by {err}")
+check(float(np.abs(posed - base_a).max()) > 0.1 * diag(TV), "the pose did not turn")
+results["pose_error"] = err
+arm.data.shape_keys.key_blocks["morphkit_pose"].value = 1.0
+render("pose", arm)
+
 (OUT / "results.json").write_text(json.dumps(results, indent=2))
 print("MORPHKIT ADDON TESTS PASSED", json.dumps(results))

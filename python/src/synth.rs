@@ -136,6 +136,25 @@ impl PyPartitions {
         Ok(Array1::from(sel.triangles).into_pyarray(py))
     }
 
+    /// Pose modification (Sec. 3.2.4): the partitions selected by the scribble `scribble` (an
+    /// `(m,) bool` triangle mask, refined as in :meth:`refine`) turn by `angle` radians about
+    /// `axis`, the flexible joints blend (Eq. 5 weights), the unselected stiff parts stay put.
+    /// Returns the edited reference pose, a new `(n, 3)` array.
+    fn edit_pose<'py>(
+        &self,
+        py: Python<'py>,
+        scribble: &Bound<'py, PyAny>,
+        axis: [f64; 3],
+        angle: f64,
+    ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+        let mask = mask_of("scribble", scribble, self.mesh.num_triangles())?;
+        let (mesh, parts) = (&self.mesh, &self.inner);
+        let edit = py
+            .detach(|| msynth::edit_pose(mesh, parts, &mask, axis, angle))
+            .py(Kind::Transfer)?;
+        Ok(crate::arrays::to_array(py, &edit.positions))
+    }
+
     /// Eq. 5 blend weights of a selection (`(m,) bool`, e.g. from :meth:`refine`): 1 on the
     /// selected stiff partitions, 0 on the other stiff ones, harmonic in between (`kappa`,
     /// default 1e4, the constraint weight). A new `(m,)` array in [0, 1].

@@ -118,3 +118,21 @@ def test_geodesic_distance_matches_libigl_exact():
     # The heat method (Crane et al. 2013) at the default time step is within a few percent.
     assert np.abs(d[far] / exact[far] - 1).max() < 0.15  # measured 0.090, mean 0.0096
     assert np.abs(d[far] / exact[far] - 1).mean() < 0.03
+
+
+def test_edit_pose_turns_the_selected_part_about_its_joint(jointed):
+    V, F, frames = jointed
+    parts = morphkit.Partitions(V, F, morphkit.flexibility(V, F, frames))
+    x = centroids_x(V, F)
+    sel = parts.refine(triangles=np.flatnonzero(x > 4.0).tolist())
+    X = parts.edit_pose(sel, (0.0, 0.0, 1.0), 0.6)
+    left = V[:, 0] < 2.0
+    right = V[:, 0] > 4.5
+    assert np.abs(X[left] - V[left]).max() < 0.01 * diag(V)  # the rest stays put
+    # The right part is turned rigidly by 0.6 rad about z: compare edge directions.
+    a, b = np.flatnonzero(right)[[0, -1]]
+    d0, d1 = V[b] - V[a], X[b] - X[a]
+    ang = np.arctan2(d1[1], d1[0]) - np.arctan2(d0[1], d0[0])
+    assert abs(ang - 0.6) < 0.05
+    with pytest.raises(morphkit.TransferError):
+        parts.edit_pose(sel, (0.0, 0.0, 0.0), 0.6)
