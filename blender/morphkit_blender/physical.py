@@ -42,14 +42,19 @@ def obstacles_of(scene, obj):
     ]
 
 
+def _obstacle_mesh(o, obj):
+    """`o`'s (V, F) in `obj`'s object space."""
+    F, _ = geometry.triangles(o.data)
+    V = geometry.vertices(o.data)
+    m = np.array(obj.matrix_world.inverted() @ o.matrix_world)
+    return V @ m[:3, :3].T + m[:3, 3], F
+
+
 def _obstacle(o, obj):
     """`o` as a morphkit Obstacle in `obj`'s object space."""
     import morphkit
 
-    F, _ = geometry.triangles(o.data)
-    V = geometry.vertices(o.data)
-    m = np.array(obj.matrix_world.inverted() @ o.matrix_world)
-    V = V @ m[:3, :3].T + m[:3, 3]
+    V, F = _obstacle_mesh(o, obj)
     return morphkit.Obstacle.mesh(V, F, name=o.name)
 
 
@@ -251,6 +256,71 @@ class MORPHKIT_OT_physical_bake(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class MORPHKIT_OT_export_scene(bpy.types.Operator):
+    """Write the blend as the scene file `morphkit blend --scene` reads: base, target and
+    obstacle meshes as OBJ, the animated slider values over the frame range as a weights file,
+    the pulls, and scene.toml, so that a pipeline can replay it"""
+
+    bl_idname = "morphkit.export_scene"
+    bl_label = "Export scene (TOML)"
+
+    directory: bpy.props.StringProperty(name="Folder", subtype="DIR_PATH")
+
+    @classmethod
+    def poll(cls, context):
+        return _has_keys(context)
+
+    def execute(self, context):
+        import json
+        import os
+
+        import morphkit
+
+        obj, scene = context.active_object, context.scene
+        out = bpy.path.abspath(self.directory)
+        if not out or out.startswith("//"):
+            self.report({"ERROR"}, "give an absolute folder")
+            return {"CANCELLED"}
+        os.makedirs(out, exist_ok=True)
+        keys = obj.data.shape_keys.key_blocks
+        F, _ = geometry.triangles(obj.data)
+        clean = bpy.path.clean_name
+        morphkit.write(os.path.join(out, "base.obj"), geometry.key_coords(keys[0]), F)
+        targets = []
+        for k in target_keys(obj):
+            name = f"target_{clean(k.name)}.obj"
+            morphkit.write(os.path.join(out, name), geometry.key_coords(k), F)
+            targets.append(name)
+        rows, current = [], scene.frame_current
+        for f in range(scene.frame_start, scene.frame_end + 1):
+            scene.frame_set(f)
+            rows.append(weights_of(obj))
+        scene.frame_set(current)
+        with open(os.path.join(out, "weights.json"), "w") as fh:
+            json.dump({"frames": rows}, fh)
+        lines = [
+            'base = "base.obj"',
+            "targets = [" + ", ".join(json.dumps(t) for t in targets) + "]",
+            "",
+            "[weights]",
+            'file = "weights.json"',
+            "",
+            "[output]",
+            f"fps = {scene.render.fps / scene.render.fps_base}",
+        ]
+        for o in obstacles_of(scene, obj):
+            ob = _obstacle_mesh(o, obj)
+            name = f"obstacle_{clean(o.name)}.obj"
+            morphkit.write(os.path.join(out, name), *ob)
+            lines += ["", "[[obstacle]]", f"name = {json.dumps(o.name)}", f'mesh = "{name}"']
+        for v, p in sorted(pulls_of(obj, scene).items()):
+            lines += ["", "[[pull]]", f"vertex = {v}", f"position = [{p[0]!r}, {p[1]!r}, {p[2]!r}]"]
+        with open(os.path.join(out, "scene.toml"), "w") as fh:
+            fh.write("\n".join(lines) + "\n")
+        self.report({"INFO"}, f"wrote {os.path.join(out, 'scene.toml')}")
+        return {"FINISHED"}
+
+
 def _live_handler(scene, depsgraph=None):
     """Re-solves live objects whose sliders or pulls changed (the slider drives the blend)."""
     if _busy[0]:
@@ -301,6 +371,7 @@ class MORPHKIT_PT_physical(bpy.types.Panel):
         row.operator(MORPHKIT_OT_physical_update.bl_idname, text="Physical")
         row.operator(MORPHKIT_OT_physical_linear.bl_idname, text="Linear")
         layout.operator(MORPHKIT_OT_physical_bake.bl_idname)
+        layout.operator(MORPHKIT_OT_export_scene.bl_idname)
         if "morphkit_latency_ms" in obj:
             layout.label(text=f"last solve {obj['morphkit_latency_ms']:.0f} ms")
 
@@ -309,6 +380,7 @@ classes = (
     MORPHKIT_OT_physical_update,
     MORPHKIT_OT_physical_linear,
     MORPHKIT_OT_physical_bake,
+    MORPHKIT_OT_export_scene,
     MORPHKIT_PT_physical,
 )
 

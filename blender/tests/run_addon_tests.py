@@ -193,6 +193,25 @@ sb = morphkit.SceneBlend(V0, [V1], F_b, obstacles=[obst])
 err = float(np.abs(got - sb.solve(1.0)).max()) / diag(V0)
 check(err < 1e-6, f"the obstacle blend differs from the module by {err}")
 results["obstacle_contacts"] = int(cyl["morphkit_contacts"])
+# The same blend exported as a scene file and replayed by the CLI (when its binary is known).
+scene_dir = OUT / "scene"
+check(bpy.ops.morphkit.export_scene(directory=str(scene_dir)) == {"FINISHED"}, "export_scene")
+check((scene_dir / "scene.toml").exists(), "no scene.toml")
+import os  # noqa: E402
+import subprocess  # noqa: E402
+
+if os.environ.get("MORPHKIT_BIN"):
+    r = subprocess.run(
+        [os.environ["MORPHKIT_BIN"], "blend", "--scene", str(scene_dir / "scene.toml"),
+         "--out", str(scene_dir / "replay")],
+        capture_output=True, text=True,
+    )
+    check(r.returncode == 0, f"the CLI refused the exported scene: {r.stderr}")
+    replay, _, _ = morphkit.read_animation(scene_dir / "replay")
+    cur = scene.frame_current - scene.frame_start
+    err = float(np.abs(replay[cur] - got).max()) / diag(V0)
+    check(err < 1e-5, f"the CLI's replay of the scene differs by {err}")
+    results["scene_replay_error"] = err
 render("obstacle", cyl, also=[bar])
 bpy.data.objects.remove(bar)
 
