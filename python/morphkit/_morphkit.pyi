@@ -44,6 +44,8 @@ class PhysicalBlend:
         kinematic_stretch: Optional[float] = None,
         gradient_tolerance: Optional[float] = None,
         max_newton_iterations: Optional[int] = None,
+        interior: Optional[str] = None,
+        anchor: Optional[str] = None,
     ) -> None: ...
     def solve(
         self,

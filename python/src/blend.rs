@@ -7,7 +7,8 @@ use crate::errors::{new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
 use morphkit::mesh::ShapeSet;
 use morphkit::springs::{
-    BlendOptions, FixedVertices, FrameStats, PhysicalBlend, PointTarget, Weights,
+    AnchorOptions, AnchorPlacement, BlendOptions, FixedVertices, FrameStats, InteriorMode,
+    InteriorOptions, PhysicalBlend, PointTarget, VolumetricBlend, Weights,
 };
 use numpy::{PyArray2, PyArray3};
 use pyo3::prelude::*;
@@ -24,7 +25,7 @@ use pyo3::prelude::*;
 /// True
 #[pyclass(name = "PhysicalBlend", module = "morphkit")]
 pub struct PyPhysicalBlend {
-    inner: PhysicalBlend,
+    inner: Solver,
     targets: usize,
     vertices: usize,
     last: Option<FrameStats>,
@@ -58,6 +59,12 @@ pub fn fixed_vertices(obj: Option<&Bound<'_, PyAny>>) -> PyResult<FixedVertices>
         })
         .collect::<PyResult<Vec<u32>>>()?;
     Ok(FixedVertices::Ids(ids))
+}
+
+/// The surface-only blend, or the blend with internal springs and an anchor (Sec. 3.1, 3.4).
+enum Solver {
+    Surface(PhysicalBlend),
+    Volume(Box<VolumetricBlend>),
 }
 
 pub fn weights(obj: &Bound<'_, PyAny>, convex: bool, targets: usize) -> PyResult<Weights> {
@@ -138,9 +145,13 @@ impl PyPhysicalBlend {
     /// (interpolated linearly). `hinge_weight` (default 0.01, 0 turns the bending term off),
     /// `kinematic_stretch` (default 10), `gradient_tolerance` (default 1e-6),
     /// `max_newton_iterations` (default 300): see the library's `BlendOptions`.
+    /// `interior="lattice"` adds internal springs on a lattice inside each closed component
+    /// (Sec. 3.1); `anchor="auto"` adds the rigid interior anchor (Sec. 3.4), which then holds
+    /// the body instead of fixed vertices. `summary["interior"]` reports what was built.
     #[new]
     #[pyo3(signature = (base, targets, faces, *, fixed=None, hinge_weight=None,
-        kinematic_stretch=None, gradient_tolerance=None, max_newton_iterations=None))]
+        kinematic_stretch=None, gradient_tolerance=None, max_newton_iterations=None,
+        interior=None, anchor=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -152,6 +163,8 @@ impl PyPhysicalBlend {
         kinematic_stretch: Option<f64>,
         gradient_tolerance: Option<f64>,
         max_newton_iterations: Option<usize>,
+        interior: Option<&str>,
+        anchor: Option<&str>,
     ) -> PyResult<Self> {
         let mesh = from_arrays("base", base, faces)?;
         let n = mesh.num_vertices();
@@ -187,9 +200,48 @@ impl PyPhysicalBlend {
         if let Some(m) = max_newton_iterations {
             opts.max_newton_iterations = m;
         }
-        let inner = py
-            .detach(|| PhysicalBlend::new(&shapes, &opts))
-            .py(Kind::Blend)?;
+        let mode = match interior.unwrap_or("none") {
+            "none" => InteriorMode::None,
+            "lattice" => InteriorMode::Lattice,
+            "tetgen" => InteriorMode::Tetgen,
+            other => {
+                return Err(new_err(
+                    Kind::Blend,
+                    format!(
+                        "interior: expected \"none\", \"lattice\" or \"tetgen\", got {other:?}"
+                    ),
+                ))
+            }
+        };
+        let placement = match anchor.unwrap_or("none") {
+            "none" => AnchorPlacement::None,
+            "auto" => AnchorPlacement::Auto,
+            other => {
+                return Err(new_err(
+                    Kind::Blend,
+                    format!("anchor: expected \"none\" or \"auto\", got {other:?}"),
+                ))
+            }
+        };
+        let inner = if mode == InteriorMode::None && placement == AnchorPlacement::None {
+            Solver::Surface(
+                py.detach(|| PhysicalBlend::new(&shapes, &opts))
+                    .py(Kind::Blend)?,
+            )
+        } else {
+            let io = InteriorOptions {
+                mode,
+                ..InteriorOptions::default()
+            };
+            let ao = AnchorOptions {
+                placement,
+                ..AnchorOptions::default()
+            };
+            Solver::Volume(Box::new(
+                py.detach(|| VolumetricBlend::new(&shapes, &opts, &io, &ao))
+                    .py(Kind::Blend)?,
+            ))
+        };
         Ok(Self {
             inner,
             targets: k,
@@ -215,12 +267,26 @@ impl PyPhysicalBlend {
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let w = self::weights(weights, convex, self.targets)?;
         let targets = self::pulls(pulls, self.vertices)?;
-        let inner = &mut self.inner;
-        let result = py
-            .detach(|| inner.solve_with(&w, &targets, None))
-            .py(Kind::Blend)?;
-        let out = to_array(py, &result.positions);
-        self.last = Some(result.stats);
+        let (positions, stats) = match &mut self.inner {
+            Solver::Surface(b) => {
+                let r = py
+                    .detach(|| b.solve_with(&w, &targets, None))
+                    .py(Kind::Blend)?;
+                (r.positions, r.stats)
+            }
+            Solver::Volume(b) => {
+                if !targets.is_empty() {
+                    return Err(new_err(
+                        Kind::Blend,
+                        "pulls: not available with interior or anchor yet",
+                    ));
+                }
+                let r = py.detach(|| b.solve(&w)).py(Kind::Blend)?;
+                (r.positions, r.stats)
+            }
+        };
+        let out = to_array(py, &positions);
+        self.last = Some(stats);
         Ok(out)
     }
 
@@ -245,19 +311,29 @@ impl PyPhysicalBlend {
             })?
             .map(|row| self::weights(&row?, convex, self.targets))
             .collect::<PyResult<Vec<Weights>>>()?;
-        let inner = &mut self.inner;
-        let results = py.detach(|| inner.solve_many(&rows, threads));
+        let results: Vec<Result<(Vec<_>, FrameStats), _>> = match &mut self.inner {
+            Solver::Surface(b) => py
+                .detach(|| b.solve_many(&rows, threads))
+                .into_iter()
+                .map(|r| r.map(|r| (r.positions, r.stats)))
+                .collect(),
+            Solver::Volume(b) => py
+                .detach(|| b.solve_many(&rows, threads))
+                .into_iter()
+                .map(|r| r.map(|r| (r.positions, r.stats)))
+                .collect(),
+        };
         let mut frames = Vec::with_capacity(results.len());
         let mut last = None;
         for (i, r) in results.into_iter().enumerate() {
-            let r = r.map_err(|e| {
+            let (positions, stats) = r.map_err(|e| {
                 new_err(
                     Kind::Blend,
                     format!("frame {i}: {}", crate::errors::chain(&e)),
                 )
             })?;
-            frames.push(r.positions);
-            last = Some(r.stats);
+            frames.push(positions);
+            last = Some(stats);
         }
         self.last = last;
         Ok(to_array3(py, &frames, self.vertices))
@@ -275,7 +351,14 @@ impl PyPhysicalBlend {
     /// vertices, free unknowns, factor size, predicted bytes) as a dict.
     #[getter]
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_dict(py, self.inner.summary())
+        match &self.inner {
+            Solver::Surface(b) => to_dict(py, b.summary()),
+            Solver::Volume(b) => {
+                let d = to_dict(py, b.physical().summary())?;
+                d.set_item("interior", to_dict(py, b.report())?)?;
+                Ok(d)
+            }
+        }
     }
 
     /// Number of targets (shapes other than the base).

@@ -79,3 +79,18 @@ def bend(V, angle):
 
 def diag(V):
     return float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+
+
+def capped_tube(rings=16, around=12, length=6.0, radius=0.5):
+    """A closed tube along x (end caps fanned around a centre vertex), outward-oriented."""
+    V, F = tube(rings, around, length, radius)
+    n = len(V)
+    V = np.vstack([V, [[0.0, 0.0, 0.0], [length, 0.0, 0.0]]])
+    caps = []
+    last = rings * around
+    for k in range(around):
+        k1 = (k + 1) % around
+        caps.append([n, k1, k])
+        caps.append([n + 1, last + k, last + k1])
+    F = np.vstack([F, np.array(caps)])
+    return V, F

@@ -123,3 +123,23 @@ def test_real_horse_endpoint(data):
     V1, _ = morphkit.read(data("sumner-horse-camel/horse-05.obj.gz"))
     b = morphkit.PhysicalBlend(V0, [V1], F)
     assert np.abs(b.solve(1.0) - V1).max() <= 1e-6 * diag(V0)
+
+
+def test_interior_and_anchor():
+    from conftest import capped_tube
+
+    V, F = capped_tube()
+    assert morphkit.metrics(V, V, F)["volume"] > 0  # closed and outward
+    B = bend(V, 1.5)
+    b = morphkit.PhysicalBlend(V, [B], F, interior="lattice", anchor="auto")
+    info = b.summary["interior"]
+    assert info["interior_vertices"] > 0 and info["anchor_vertices"] == 8
+    d = diag(V)
+    assert np.abs(b.solve(0.0) - V).max() <= 1e-6 * d
+    assert np.abs(b.solve(1.0) - B).max() <= 1e-6 * d
+    half = b.solve(0.5)
+    assert b.last_stats["converged"]
+    vol = morphkit.metrics(V, half, F)["volume_ratio"]
+    assert 0.9 < vol < 1.1
+    with pytest.raises(morphkit.BlendError, match="interior"):
+        morphkit.PhysicalBlend(V, [B], F, interior="voxels")
