@@ -63,7 +63,7 @@ pub fn fixed_vertices(obj: Option<&Bound<'_, PyAny>>) -> PyResult<FixedVertices>
 
 /// The surface-only blend, or the blend with internal springs and an anchor (Sec. 3.1, 3.4).
 enum Solver {
-    Surface(PhysicalBlend),
+    Surface(Box<PhysicalBlend>),
     Volume(Box<VolumetricBlend>),
 }
 
@@ -224,10 +224,10 @@ impl PyPhysicalBlend {
             }
         };
         let inner = if mode == InteriorMode::None && placement == AnchorPlacement::None {
-            Solver::Surface(
+            Solver::Surface(Box::new(
                 py.detach(|| PhysicalBlend::new(&shapes, &opts))
                     .py(Kind::Blend)?,
-            )
+            ))
         } else {
             let io = InteriorOptions {
                 mode,

@@ -28,6 +28,9 @@ pub struct PyObstacle {
 
 type Key = (f64, [f64; 3], Option<[f64; 4]>);
 
+/// `(vertex, [(frame, (x, y, z)), …])`.
+type PullSpec = (u32, Vec<(f64, [f64; 3])>);
+
 /// `(frame, translation)` or `(frame, translation, (w, x, y, z))`.
 fn key_of(obj: &Bound<'_, PyAny>) -> PyResult<Key> {
     if let Ok((f, t)) = obj.extract::<(f64, [f64; 3])>() {
@@ -151,7 +154,7 @@ impl PySceneBlend {
         targets: &Bound<'_, PyAny>,
         faces: &Bound<'_, PyAny>,
         obstacles: Vec<Bound<'_, PyObstacle>>,
-        pulls: Vec<(u32, Vec<(f64, [f64; 3])>)>,
+        pulls: Vec<PullSpec>,
         fixed: Option<&Bound<'_, PyAny>>,
         hinge_weight: Option<f64>,
         tolerance: f64,
