@@ -61,6 +61,32 @@ pub fn fixed_vertices(obj: Option<&Bound<'_, PyAny>>) -> PyResult<FixedVertices>
     Ok(FixedVertices::Ids(ids))
 }
 
+/// The rig of a blend: `base` `(n, 3)` and `targets` `(k, n, 3)` over `faces`, at least one
+/// target; shape 0 is the base.
+pub fn shape_set(
+    base: &Bound<'_, PyAny>,
+    targets: &Bound<'_, PyAny>,
+    faces: &Bound<'_, PyAny>,
+) -> PyResult<ShapeSet> {
+    let mesh = from_arrays("base", base, faces)?;
+    let n = mesh.num_vertices();
+    let targets = arrays::frames("targets", targets, Some(n))?;
+    if targets.is_empty() {
+        return Err(new_err(
+            Kind::Blend,
+            "targets: at least one target is needed",
+        ));
+    }
+    let mut named = vec![("base".to_string(), mesh.positions.clone())];
+    named.extend(
+        targets
+            .into_iter()
+            .enumerate()
+            .map(|(i, p)| (format!("target_{i}"), p)),
+    );
+    ShapeSet::new(mesh, named).py(Kind::Mesh)
+}
+
 /// The surface-only blend, or the blend with internal springs and an anchor (Sec. 3.1, 3.4).
 enum Solver {
     Surface(Box<PhysicalBlend>),
@@ -166,24 +192,8 @@ impl PyPhysicalBlend {
         interior: Option<&str>,
         anchor: Option<&str>,
     ) -> PyResult<Self> {
-        let mesh = from_arrays("base", base, faces)?;
-        let n = mesh.num_vertices();
-        let targets = arrays::frames("targets", targets, Some(n))?;
-        if targets.is_empty() {
-            return Err(new_err(
-                Kind::Blend,
-                "targets: at least one target is needed",
-            ));
-        }
-        let k = targets.len();
-        let mut named = vec![("base".to_string(), mesh.positions.clone())];
-        named.extend(
-            targets
-                .into_iter()
-                .enumerate()
-                .map(|(i, p)| (format!("target_{i}"), p)),
-        );
-        let shapes = ShapeSet::new(mesh, named).py(Kind::Mesh)?;
+        let shapes = shape_set(base, targets, faces)?;
+        let (n, k) = (shapes.num_vertices(), shapes.len() - 1);
         let mut opts = BlendOptions {
             fixed: fixed_vertices(fixed)?,
             ..BlendOptions::default()

@@ -1,12 +1,11 @@
 //! Physical blends in a scene (Ma et al. 2012, Sec. 4): rigid obstacles with keyframed motion
 //! and keyframed pulls, through the library's `scene::SceneBlend`.
 
-use crate::arrays;
 use crate::arrays::to_array;
 use crate::dict::to_dict;
 use crate::errors::{new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
-use morphkit::mesh::ShapeSet;
+
 use morphkit::scene::{
     CollisionOptions, Obstacle, Primitive, Pull, PullKey, PullKind, RigidKey, Rotation, SceneBlend,
     SceneFrame,
@@ -160,24 +159,8 @@ impl PySceneBlend {
         tolerance: f64,
         max_rounds: usize,
     ) -> PyResult<Self> {
-        let mesh = from_arrays("base", base, faces)?;
-        let n = mesh.num_vertices();
-        let targets = arrays::frames("targets", targets, Some(n))?;
-        if targets.is_empty() {
-            return Err(new_err(
-                Kind::Blend,
-                "targets: at least one target is needed",
-            ));
-        }
-        let k = targets.len();
-        let mut named = vec![("base".to_string(), mesh.positions.clone())];
-        named.extend(
-            targets
-                .into_iter()
-                .enumerate()
-                .map(|(i, p)| (format!("target_{i}"), p)),
-        );
-        let shapes = ShapeSet::new(mesh, named).py(Kind::Mesh)?;
+        let shapes = crate::blend::shape_set(base, targets, faces)?;
+        let k = shapes.len() - 1;
         let mut opts = BlendOptions {
             fixed: crate::blend::fixed_vertices(fixed)?,
             ..BlendOptions::default()

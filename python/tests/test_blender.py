@@ -21,18 +21,25 @@ import morphkit
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
-def test_addon_headless(tmp_path, data):
-    exe = shutil.which("blender")
-    if exe is None:
+def addon_zip(tmp_path, *tools):
+    """The add-on zip with this build's module inside; skips (or fails, in CI) without the
+    programs `tools`."""
+    missing = [t for t in tools if shutil.which(t) is None]
+    if missing:
         if os.environ.get("MORPHKIT_REQUIRE_BLENDER"):
-            pytest.fail("MORPHKIT_REQUIRE_BLENDER is set but no blender is on the PATH")
-        pytest.skip("no blender on the PATH")
-    data_dir = data("cragl-bending-cylinder").parent
+            pytest.fail(f"MORPHKIT_REQUIRE_BLENDER is set but {missing} are not on the PATH")
+        pytest.skip(f"{missing} not on the PATH")
     sys.path.insert(0, str(ROOT / "blender"))
     import build_addon
 
     module_root = pathlib.Path(morphkit.__file__).resolve().parents[1]
-    addon = build_addon.build(tmp_path / "morphkit_blender.zip", module_root)
+    return build_addon.build(tmp_path / "morphkit_blender.zip", module_root)
+
+
+def test_addon_headless(tmp_path, data):
+    addon = addon_zip(tmp_path, "blender")
+    exe = shutil.which("blender")
+    data_dir = data("cragl-bending-cylinder").parent
     out = ROOT / "target" / "blender-test"
     shutil.rmtree(out, ignore_errors=True)
     env = dict(os.environ)
@@ -60,17 +67,8 @@ def test_addon_headless(tmp_path, data):
 
 def test_panel_screenshot(tmp_path, data):
     """The sidebar panels in a real window on a virtual display (xvfb-run), for the README."""
-    exe, xvfb = shutil.which("blender"), shutil.which("xvfb-run")
-    if exe is None or xvfb is None:
-        if os.environ.get("MORPHKIT_REQUIRE_BLENDER"):
-            pytest.fail("MORPHKIT_REQUIRE_BLENDER is set but blender or xvfb-run is missing")
-        pytest.skip("no blender or xvfb-run on the PATH")
+    addon = addon_zip(tmp_path, "blender", "xvfb-run")
     data_dir = data("cragl-bending-cylinder").parent
-    sys.path.insert(0, str(ROOT / "blender"))
-    import build_addon
-
-    module_root = pathlib.Path(morphkit.__file__).resolve().parents[1]
-    addon = build_addon.build(tmp_path / "morphkit_blender.zip", module_root)
     out = ROOT / "target" / "blender-test" / "panel.png"
     out.parent.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ)
