@@ -24,7 +24,7 @@
 //! the base (capped at `max_shape_factor`) and $\mu = c\, \overline{k}\, \overline{l^2}$ (mean
 //! structure-spring stiffness and squared length on the base), so `weight` $= c$ is unit-free.
 //! The projected Hessian is Gauss–Newton, $2 \mu b_h J^\top J$ (positive semi-definite); the
-//! exact one adds the second-order part by central differences of the analytic gradient.
+//! exact one adds the second-order part in closed form.
 //!
 //! Hinges are left out where the dihedral angle is ill defined in some shape: a face of
 //! (nearly) zero area, an edge of zero length, or a fold within `min_fold_margin` of ±π.
@@ -234,43 +234,86 @@ impl HingeTerm {
 }
 
 impl HingeTerm {
-    /// Gradient of hinge `k`'s energy with respect to its four corners, $2 w J^\top \rho$.
-    fn local_gradient(&self, p: &[f64], k: usize, pos: [Vector3<f64>; 4]) -> [Vector3<f64>; 4] {
-        let (rho, j) = self.residual_at(p, k, pos);
-        let w = 2.0 * self.weight[k];
-        std::array::from_fn(|v| j[v].transpose() * rho * w)
-    }
-
-    /// The full Hessian $2w(J^\top J + \sum_i \rho_i \nabla^2 \rho_i)$ of every hinge, by central
-    /// differences of the analytic local gradient (12 corner coordinates, step $10^{-6}$ of the
-    /// hinge's edge length; symmetrised). Near an equilibrium where the hinges balance the
-    /// springs, $\rho \neq 0$ and the Gauss–Newton part alone makes Newton converge only
-    /// linearly; with the second-order part it converges quadratically.
+    /// The full Hessian $2w(J^\top J + \sum_i \rho_i \nabla^2 \rho_i)$ of every hinge, in
+    /// closed form. Near an equilibrium where the hinges balance the springs, $\rho \neq 0$
+    /// and the Gauss–Newton part alone makes Newton converge only linearly; with the
+    /// second-order part it converges quadratically.
+    ///
+    /// The second-order part is the Hessian of $f = r \cdot \rho$ with $r = \rho$ held fixed.
+    /// In the edge variables $e = b - a$, $u_1 = c - a$, $u_2 = d - a$ (so $n_1 = e \times u_1$,
+    /// $n_2 = u_2 \times e$),
+    /// $$f = \beta_2^{-1}\, r\cdot(u_2 \times e) - \beta_1^{-1}\cos\bar\Theta\; r\cdot(e \times u_1)
+    ///      - \beta_1^{-1}\sin\bar\Theta\; \hat e \cdot (n_1 \times r).$$
+    /// A triple product $r\cdot(p \times q)$ has the constant mixed blocks
+    /// $\partial^2/\partial p\,\partial q = -[r]_\times$ (and its transpose); the last term adds
+    /// the curvature of $\hat e = e/\lVert e\rVert$, $\nabla^2(m\cdot\hat e) = (3(m\cdot\hat e)\hat e\hat e^\top
+    /// - (m\cdot\hat e) I - m\hat e^\top - \hat e m^\top)/\lVert e\rVert^2$ with $m = n_1 \times r$, and the
+    /// products of first derivatives of $\hat e$ and $m$. The blocks are mapped to the corners
+    /// by $e = b - a$, $u_1 = c - a$, $u_2 = d - a$. The tests check it against differences of the
+    /// analytic gradient.
     fn add_exact_hessian(&self, p: &TermParameters, x: &[f64], h: &mut BlockHessian) {
+        let id = Matrix3::<f64>::identity();
         for k in 0..self.hinges.len() {
             let hv = self.hinges[k];
             let pos = hv.map(|v| v3(x, v));
-            let step = 1e-6 * (pos[1] - pos[0]).norm().max(f64::MIN_POSITIVE);
-            // cols[v][a]: derivative of the local gradient along coordinate a of corner v.
-            let mut cols = [[[Vector3::zeros(); 4]; 3]; 4];
-            for v in 0..4 {
-                for a in 0..3 {
-                    let (mut plus, mut minus) = (pos, pos);
-                    plus[v][a] += step;
-                    minus[v][a] -= step;
-                    let gp = self.local_gradient(&p.values, k, plus);
-                    let gm = self.local_gradient(&p.values, k, minus);
-                    for u in 0..4 {
-                        cols[v][a][u] = (gp[u] - gm[u]) / (2.0 * step);
-                    }
+            let (r, j) = self.residual_at(&p.values, k, pos);
+            // d enters only through u2 = d − a, whose blocks are constant.
+            let [a, b, c, _] = pos;
+            let pv = &p.values[4 * k..4 * k + 4];
+            let (cs, sn, ib1, ib2) = (pv[0], pv[1], pv[2], pv[3]);
+            let (e, u1) = (b - a, c - a);
+            let le = e.norm().max(f64::MIN_POSITIVE);
+            let eh = e / le;
+            let n1 = e.cross(&u1);
+            // Second derivatives in (e, u1, u2): hy[p][q] = ∂²f/∂p∂q.
+            let mut hy = [[Matrix3::<f64>::zeros(); 3]; 3];
+            let (sr, ss) = (skew(&r), skew(&r.cross(&eh)));
+            // ib2 r·(u2 × e)
+            hy[2][0] -= sr * ib2;
+            hy[0][2] += sr * ib2;
+            // −ib1 cs r·(e × u1)
+            hy[0][1] += sr * (ib1 * cs);
+            hy[1][0] -= sr * (ib1 * cs);
+            // −ib1 sn ê·m, m = n1 × r
+            let m = n1.cross(&r);
+            let me = m.dot(&eh);
+            let mut g = [[Matrix3::<f64>::zeros(); 3]; 3];
+            g[0][0] = (eh * eh.transpose() * (3.0 * me)
+                - id * me
+                - m * eh.transpose()
+                - eh * m.transpose())
+                / (le * le);
+            let de = (id - eh * eh.transpose()) / le;
+            let dm_e = sr * skew(&u1);
+            let dm_u1 = -sr * skew(&e);
+            g[0][0] += de.transpose() * dm_e + dm_e.transpose() * de;
+            g[0][1] += de.transpose() * dm_u1 - ss;
+            g[1][0] += dm_u1.transpose() * de + ss;
+            for pp in 0..2 {
+                for qq in 0..2 {
+                    hy[pp][qq] -= g[pp][qq] * (ib1 * sn);
                 }
             }
+            // Corners: e = b − a, u1 = c − a, u2 = d − a.
+            const MAP: [[f64; 4]; 3] = [
+                [-1.0, 1.0, 0.0, 0.0],
+                [-1.0, 0.0, 1.0, 0.0],
+                [-1.0, 0.0, 0.0, 1.0],
+            ];
+            let w = 2.0 * self.weight[k];
             for u in 0..4 {
                 for v in u..4 {
-                    // Block (u, v): rows = coords of u, cols = coords of v, symmetrised.
-                    let b: Block = std::array::from_fn(|r| {
-                        std::array::from_fn(|c| 0.5 * (cols[v][c][u][r] + cols[u][r][v][c]))
-                    });
+                    let mut blk = j[u].transpose() * j[v];
+                    for (pp, mp) in MAP.iter().enumerate() {
+                        for (qq, mq) in MAP.iter().enumerate() {
+                            let s = mp[u] * mq[v];
+                            if s != 0.0 {
+                                blk += hy[pp][qq] * s;
+                            }
+                        }
+                    }
+                    let b: Block =
+                        std::array::from_fn(|rr| std::array::from_fn(|cc| w * blk[(rr, cc)]));
                     h.add(hv[u] as usize, hv[v] as usize, &b);
                 }
             }
