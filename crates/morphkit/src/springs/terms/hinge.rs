@@ -242,15 +242,15 @@ impl HingeTerm {
     /// The second-order part is the Hessian of $f = r \cdot \rho$ with $r = \rho$ held fixed.
     /// In the edge variables $e = b - a$, $u_1 = c - a$, $u_2 = d - a$ (so $n_1 = e \times u_1$,
     /// $n_2 = u_2 \times e$),
-    /// $$f = \beta_2^{-1}\, r\cdot(u_2 \times e) - \beta_1^{-1}\cos\bar\Theta\; r\cdot(e \times u_1)
-    ///      - \beta_1^{-1}\sin\bar\Theta\; \hat e \cdot (n_1 \times r).$$
+    /// $$f = \beta_2^{-1}\, r\cdot(u_2 \times e) - \beta_1^{-1}\cos\bar\Theta\; r\cdot(e \times u_1) -
+    ///   \beta_1^{-1}\sin\bar\Theta\; \hat e \cdot (n_1 \times r).$$
     /// A triple product $r\cdot(p \times q)$ has the constant mixed blocks
-    /// $\partial^2/\partial p\,\partial q = -[r]_\times$ (and its transpose); the last term adds
-    /// the curvature of $\hat e = e/\lVert e\rVert$, $\nabla^2(m\cdot\hat e) = (3(m\cdot\hat e)\hat e\hat e^\top
-    /// - (m\cdot\hat e) I - m\hat e^\top - \hat e m^\top)/\lVert e\rVert^2$ with $m = n_1 \times r$, and the
-    /// products of first derivatives of $\hat e$ and $m$. The blocks are mapped to the corners
-    /// by $e = b - a$, $u_1 = c - a$, $u_2 = d - a$. The tests check it against differences of the
-    /// analytic gradient.
+    /// $\partial^2/\partial p\,\partial q = -[r]_\times$ (and its transpose). The last term adds
+    /// the curvature of $\hat e = e/\lVert e\rVert$: with $m = n_1 \times r$ and $\mu = m\cdot\hat e$,
+    /// $\lVert e\rVert^2\, \nabla^2(m\cdot\hat e) = 3\mu\,\hat e\hat e^\top - \mu I - m\hat e^\top -
+    /// \hat e m^\top$, and the products of first derivatives of $\hat e$ and $m$. The blocks are
+    /// mapped to the corners by $e = b - a$, $u_1 = c - a$, $u_2 = d - a$. The tests check it
+    /// against differences of the analytic gradient.
     fn add_exact_hessian(&self, p: &TermParameters, x: &[f64], h: &mut BlockHessian) {
         let id = Matrix3::<f64>::identity();
         for k in 0..self.hinges.len() {
