@@ -11,6 +11,7 @@ pub mod correspond;
 pub mod demo;
 pub mod flex;
 pub mod info;
+pub mod rig;
 pub mod scene;
 pub mod synth;
 pub mod transfer;

@@ -19,6 +19,7 @@ pub mod laplacian;
 pub mod lsmesh;
 pub mod markers;
 pub mod quality;
+pub mod rig;
 pub mod solve;
 #[cfg(test)]
 pub(crate) mod testmesh;
@@ -39,4 +40,5 @@ pub use quality::{
     correspondence_quality, cycle_consistency, fold_count, sharp_folds, CorrespondenceQuality,
     CycleConsistency, FoldCount,
 };
+pub use rig::{transfer_rig, RigOptions, RigTransfer, TransferredShape};
 pub use solve::{SolverOptions, TransferSolver, TriangleWeighting};
