@@ -53,7 +53,10 @@ pub struct TransferArgs {
     /// Output: a directory of numbered OBJ frames, a .glb/.gltf or a .pc2.
     #[arg(long, value_name = "OUT")]
     pub out: PathBuf,
-    /// Write a JSON report (timings for correspondence, factorization and per-frame solves).
+    /// Write a JSON report (timings for correspondence, factorization and per-frame solves,
+    /// flipped triangles and sharp folds per frame; with --markers also the cycle
+    /// consistency: every frame there and back with the markers reversed, which costs a second
+    /// correspondence and twice the solves).
     #[arg(long, value_name = "JSON")]
     pub report: Option<PathBuf>,
     /// Keep constraint vertices fixed (the paper's convention); optionally name the vertex.
