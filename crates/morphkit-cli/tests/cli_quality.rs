@@ -92,6 +92,26 @@ fn reports_carry_quality_and_cycle_consistency() {
         }
         assert!(q["marker_residual_max"].as_f64().unwrap() < 1e-3);
     }
+    // The correspondence report's cycle consistency, from the frames given.
+    let rep = d.join("cycle.json");
+    ok(&[
+        "correspond",
+        "--source",
+        s(&src),
+        "--target",
+        s(&tgt),
+        "--markers",
+        s(&markers),
+        "--out",
+        s(&corr),
+        "--report",
+        s(&rep),
+        "--cycle-frames",
+        &format!("{}/frame-*.obj", d.display()),
+    ]);
+    let cyc = &json(&rep)["cycle_consistency"];
+    assert_eq!(cyc["frames"], 2);
+    assert!(cyc["max_relative"].as_f64().unwrap() < 0.1, "{cyc}");
     let report = d.join("transfer.json");
     ok(&[
         "transfer",

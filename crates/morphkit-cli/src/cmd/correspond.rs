@@ -6,8 +6,8 @@ use crate::util::{check_positive, check_range};
 use anyhow::Context;
 use morphkit::io;
 use morphkit::transfer::{
-    correspond, correspondence_quality, CorrespondenceOptions, CorrespondenceResult, Markers,
-    RefineOptions,
+    correspond, correspondence_quality, cycle_consistency, CorrespondenceOptions,
+    CorrespondenceResult, Markers, RefineOptions, TransferOptions,
 };
 use serde_json::json;
 use std::path::PathBuf;
@@ -18,6 +18,8 @@ Examples:
   morphkit correspond --source horse.obj.gz --target camel.obj.gz --markers markers.json --out corr.json
   morphkit correspond --source cat.obj --target dog.obj --markers m.json --out corr.json \\
       --warped-source cat-warped.obj --warped-target dog-warped.obj --report corr-report.json
+  morphkit correspond --source horse.obj.gz --target camel.obj.gz --markers m.json --out corr.json \\
+      --refine --report q.json --cycle-frames 'horse-*.obj.gz'
 
 Markers are JSON {\"pairs\": [[source_vertex, target_vertex], ...]}, 0-based.
 The report lists each marker's residual after warping, the target triangles whose only
@@ -67,6 +69,11 @@ pub struct CorrespondArgs {
     /// Match target → source only (no source → target pass).
     #[arg(long)]
     pub one_way: bool,
+    /// Source frames (OBJ files or quoted globs, over the source's connectivity, measured from
+    /// --source) for the report's cycle consistency: each frame transferred there and back,
+    /// the way back with the markers reversed.
+    #[arg(long, num_args = 1.., value_name = "FRAMES")]
+    pub cycle_frames: Vec<String>,
 }
 
 /// Options from the command line.
@@ -147,11 +154,22 @@ pub fn print_summary(r: &CorrespondenceResult, seconds: f64) {
 /// Runs `morphkit correspond`.
 pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
     let opts = options(args)?;
-    let inputs = vec![
+    if !args.cycle_frames.is_empty() && args.report.is_none() {
+        anyhow::bail!("--cycle-frames needs --report (the cycle consistency goes there)");
+    }
+    let cycle_files = if args.cycle_frames.is_empty() {
+        None
+    } else {
+        Some(super::convert::expand(&args.cycle_frames)?)
+    };
+    let mut inputs = vec![
         args.source.clone(),
         args.target.clone(),
         args.markers.clone(),
     ];
+    if let Some(c) = &cycle_files {
+        inputs.extend(c.protected.iter().cloned());
+    }
     let mut outputs = Plan::new(&inputs)
         .output("--out", &args.out, Kind::Json)
         .output_opt("--warped-source", args.warped_source.as_ref(), Kind::Mesh)
@@ -185,6 +203,38 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
         v["source"] = json!(args.source);
         v["target"] = json!(args.target);
         v["correspondence"] = json!(args.out);
+        if let Some(c) = &cycle_files {
+            let frames = io::read_shape_set(&c.files)?;
+            frames
+                .check_connectivity(&args.source.display().to_string(), &source)
+                .with_context(|| "--cycle-frames vs. --source".to_string())?;
+            let t0 = Instant::now();
+            let back = correspond(&target, &source, &markers.reversed(), &opts)
+                .context("correspondence of the way back (cycle consistency)")?;
+            let cyc = cycle_consistency(
+                &source,
+                frames.all_positions(),
+                &target,
+                &r.correspondence,
+                &back.correspondence,
+                &TransferOptions::default(),
+            )
+            .context("cycle consistency")?;
+            eprintln!(
+                "cycle consistency (there and back): mean {:.3e}, max {:.3e} of the source diagonal",
+                cyc.mean, cyc.max
+            );
+            v["cycle_consistency"] = json!({
+                "frames": frames.len(),
+                "mean_relative": cyc.mean,
+                "max_relative": cyc.max,
+                "frame_mean_relative": cyc.frame_mean,
+                "frame_max_relative": cyc.frame_max,
+                "forward_flipped_triangles": cyc.forward_flipped,
+                "forward_sharp_folds": cyc.forward_sharp_folds,
+                "seconds": t0.elapsed().as_secs_f64(),
+            });
+        }
         outputs.json(p, &v)?;
     }
     outputs.commit()?;
