@@ -47,9 +47,11 @@ pub struct Correspondence {
     /// Per marker, its residual after warping.
     pub marker_residuals: Vec<MarkerResidual>,
     /// Centroid distance of every match (parallel to `matches`, in the matching space), for
-    /// [`GradientCombine::InverseDistance`]; empty in files written before it existed.
+    /// [`GradientCombine::InverseDistance`]; `f32` (weights need no more; horse → camel: 4.9 MB
+    /// against 1.7 MB without distances, 7.2 MB with `f64`); empty in files written
+    /// before it existed.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub distances: Vec<f64>,
+    pub distances: Vec<f32>,
     /// The closest-point refinement steps, empty when it was off.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub refinement: Vec<RefineStep>,
@@ -124,7 +126,7 @@ impl Correspondence {
                         }
                         let mut wsum = 0.0;
                         for (&i, &di) in m.iter().zip(d) {
-                            let w = 1.0 / di;
+                            let w = 1.0 / f64::from(di);
                             s += source[i as usize] * w;
                             wsum += w;
                         }

@@ -17,7 +17,7 @@ use crate::mesh::{dot, norm, sub, Point};
 pub(super) struct Matching {
     pub offsets: Vec<u32>,
     pub matches: Vec<u32>,
-    pub distances: Vec<f64>,
+    pub distances: Vec<f32>,
     pub normal_violations: Vec<u32>,
     /// Source triangles added by the source → target pass.
     pub added_by_source: usize,
@@ -113,7 +113,7 @@ pub(super) fn match_triangles(
     let mut distances = Vec::with_capacity(total);
     for list in &lists {
         matches.extend(list.iter().map(|x| x.1));
-        distances.extend(list.iter().map(|x| x.0));
+        distances.extend(list.iter().map(|x| x.0 as f32));
         offsets.push(matches.len() as u32);
     }
     Matching {
