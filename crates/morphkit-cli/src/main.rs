@@ -29,6 +29,8 @@ enum Command {
     Correspond(cmd::correspond::CorrespondArgs),
     /// Transfer an animation from a source mesh onto a different target mesh.
     Transfer(cmd::transfer::TransferArgs),
+    /// Move a blendshape rig (neutral + named expressions) onto another character as a GLB.
+    Rig(cmd::rig::RigArgs),
     /// Show how flexible each triangle of an animation is (where markers are needed).
     Flex(cmd::flex::FlexArgs),
     /// Assemble a new animation from parts of several animations, by a TOML recipe.
@@ -46,6 +48,7 @@ fn main() {
         Command::Blend(a) => cmd::blend::run(a),
         Command::Correspond(a) => cmd::correspond::run(a),
         Command::Transfer(a) => cmd::transfer::run(a),
+        Command::Rig(a) => cmd::rig::run(a),
         Command::Flex(a) => cmd::flex::run(a),
         Command::Synth(a) => cmd::synth::run(a),
         Command::Bench(a) => cmd::bench::run(a),

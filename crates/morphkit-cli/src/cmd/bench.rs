@@ -19,8 +19,8 @@ use std::time::Instant;
     after_help = "Examples:\n  morphkit bench\n  morphkit bench --data ../shared/data --report bench.json\n  morphkit bench --suite springs --steps 36\n  morphkit bench --suite synth --data ../shared/data"
 )]
 pub struct BenchArgs {
-    /// Which suite to run: springs, transfer, memory, synth, scene (collisions), volume
-    /// (internal springs), or all (springs, transfer, synth).
+    /// Which suite to run: springs, transfer, rig (blendshape rig transfer), memory, synth,
+    /// scene (collisions), volume (internal springs), or all (springs, transfer, rig, synth).
     #[arg(long, default_value = "all")]
     suite: String,
     /// Directory of the real test meshes (defaults to $MORPHKIT_DATA when set).
@@ -232,10 +232,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     if !matches!(
         args.suite.as_str(),
-        "springs" | "transfer" | "memory" | "synth" | "scene" | "volume" | "all"
+        "springs" | "transfer" | "rig" | "memory" | "synth" | "scene" | "volume" | "all"
     ) {
         anyhow::bail!(
-            "unknown suite '{}': use springs, transfer, memory, synth, scene, volume or all",
+            "unknown suite '{}': use springs, transfer, rig, memory, synth, scene, volume or all",
             args.suite
         );
     }
@@ -260,6 +260,14 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         match data.as_deref() {
             Some(dir) => report["transfer"] = super::bench_transfer::run_transfer_bench(dir)?,
             None => println!("transfer suite skipped: it needs --data DIR or MORPHKIT_DATA (elephant, horse, camel)"),
+        }
+    }
+    if matches!(args.suite.as_str(), "rig" | "all") {
+        match data.as_deref() {
+            Some(dir) => report["rig"] = super::bench_rig::run_rig_bench(dir)?,
+            None => {
+                println!("rig suite skipped: it needs --data DIR or MORPHKIT_DATA (ict-facekit)")
+            }
         }
     }
     if matches!(args.suite.as_str(), "synth" | "all") {

@@ -5,7 +5,10 @@ use crate::outputs::{Kind, Plan};
 use crate::util::{check_positive, check_range};
 use anyhow::Context;
 use morphkit::io;
-use morphkit::transfer::{correspond, CorrespondenceOptions, CorrespondenceResult, Markers};
+use morphkit::transfer::{
+    correspond, correspondence_quality, cycle_consistency, CorrespondenceOptions,
+    CorrespondenceResult, Markers, RefineOptions, TransferOptions,
+};
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -15,10 +18,15 @@ Examples:
   morphkit correspond --source horse.obj.gz --target camel.obj.gz --markers markers.json --out corr.json
   morphkit correspond --source cat.obj --target dog.obj --markers m.json --out corr.json \\
       --warped-source cat-warped.obj --warped-target dog-warped.obj --report corr-report.json
+  morphkit correspond --source horse.obj.gz --target camel.obj.gz --markers m.json --out corr.json \\
+      --refine --report q.json --cycle-frames 'horse-*.obj.gz'
 
 Markers are JSON {\"pairs\": [[source_vertex, target_vertex], ...]}, 0-based.
-The report lists each marker's residual after warping and the target triangles whose only
-match fails the normal test (places that need more markers).";
+The report lists each marker's residual after warping, the target triangles whose only
+match fails the normal test (places that need more markers), and quality metrics that need no
+reference answer: the fraction of target triangles passing the normal test, the fraction of
+source triangles reached, marker residuals. `morphkit transfer --markers … --report` adds the
+cycle consistency (there and back with the reversed markers) and fold counts.";
 
 /// Arguments of `morphkit correspond`.
 #[derive(clap::Args, Debug)]
@@ -51,9 +59,21 @@ pub struct CorrespondArgs {
     /// Write the warped target mesh here (for inspection).
     #[arg(long, value_name = "MESH")]
     pub warped_target: Option<PathBuf>,
-    /// Write a JSON report (timings, marker residuals, normal violations).
+    /// Write a JSON report (timings, marker residuals, normal violations, quality metrics).
     #[arg(long, value_name = "JSON")]
     pub report: Option<PathBuf>,
+    /// Refine the warp by closest points (Sumner & Popović 2004, Sec. 5) before matching:
+    /// lower cycle-consistency error and fewer sharp folds, about twice the time.
+    #[arg(long)]
+    pub refine: bool,
+    /// Match target → source only (no source → target pass).
+    #[arg(long)]
+    pub one_way: bool,
+    /// Source frames (OBJ files or quoted globs, over the source's connectivity, measured from
+    /// --source) for the report's cycle consistency: each frame transferred there and back,
+    /// the way back with the markers reversed.
+    #[arg(long, num_args = 1.., value_name = "FRAMES")]
+    pub cycle_frames: Vec<String>,
 }
 
 /// Options from the command line.
@@ -65,6 +85,8 @@ fn options(args: &CorrespondArgs) -> anyhow::Result<CorrespondenceOptions> {
     o.lsmesh.omega = args.omega;
     o.radius_factor = args.radius;
     o.max_matches = args.max_matches;
+    o.refine = args.refine.then(RefineOptions::default);
+    o.two_way = !args.one_way;
     Ok(o)
 }
 
@@ -87,6 +109,10 @@ pub fn summary(r: &CorrespondenceResult, seconds: f64) -> serde_json::Value {
         "normal_violations": c.normal_violations,
         "max_marker_residual_relative": worst,
         "marker_residuals": c.marker_residuals,
+        "quality": correspondence_quality(c),
+        "refined": !c.refinement.is_empty(),
+        "refinement_steps": c.refinement,
+        "two_way_added_matches": r.added_by_source,
     })
 }
 
@@ -128,11 +154,22 @@ pub fn print_summary(r: &CorrespondenceResult, seconds: f64) {
 /// Runs `morphkit correspond`.
 pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
     let opts = options(args)?;
-    let inputs = vec![
+    if !args.cycle_frames.is_empty() && args.report.is_none() {
+        anyhow::bail!("--cycle-frames needs --report (the cycle consistency goes there)");
+    }
+    let cycle_files = if args.cycle_frames.is_empty() {
+        None
+    } else {
+        Some(super::convert::expand(&args.cycle_frames)?)
+    };
+    let mut inputs = vec![
         args.source.clone(),
         args.target.clone(),
         args.markers.clone(),
     ];
+    if let Some(c) = &cycle_files {
+        inputs.extend(c.protected.iter().cloned());
+    }
     let mut outputs = Plan::new(&inputs)
         .output("--out", &args.out, Kind::Json)
         .output_opt("--warped-source", args.warped_source.as_ref(), Kind::Mesh)
@@ -166,6 +203,38 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
         v["source"] = json!(args.source);
         v["target"] = json!(args.target);
         v["correspondence"] = json!(args.out);
+        if let Some(c) = &cycle_files {
+            let frames = io::read_shape_set(&c.files)?;
+            frames
+                .check_connectivity(&args.source.display().to_string(), &source)
+                .with_context(|| "--cycle-frames vs. --source".to_string())?;
+            let t0 = Instant::now();
+            let back = correspond(&target, &source, &markers.reversed(), &opts)
+                .context("correspondence of the way back (cycle consistency)")?;
+            let cyc = cycle_consistency(
+                &source,
+                frames.all_positions(),
+                &target,
+                &r.correspondence,
+                &back.correspondence,
+                &TransferOptions::default(),
+            )
+            .context("cycle consistency")?;
+            eprintln!(
+                "cycle consistency (there and back): mean {:.3e}, max {:.3e} of the source diagonal",
+                cyc.mean, cyc.max
+            );
+            v["cycle_consistency"] = json!({
+                "frames": frames.len(),
+                "mean_relative": cyc.mean,
+                "max_relative": cyc.max,
+                "frame_mean_relative": cyc.frame_mean,
+                "frame_max_relative": cyc.frame_max,
+                "forward_flipped_triangles": cyc.forward_flipped,
+                "forward_sharp_folds": cyc.forward_sharp_folds,
+                "seconds": t0.elapsed().as_secs_f64(),
+            });
+        }
         outputs.json(p, &v)?;
     }
     outputs.commit()?;

@@ -1,6 +1,7 @@
 //! One module per subcommand: its clap arguments and its `run`.
 
 pub mod bench;
+pub mod bench_rig;
 pub mod bench_scene;
 pub mod bench_synth;
 pub mod bench_transfer;
@@ -11,6 +12,7 @@ pub mod correspond;
 pub mod demo;
 pub mod flex;
 pub mod info;
+pub mod rig;
 pub mod scene;
 pub mod synth;
 pub mod transfer;

@@ -7,8 +7,9 @@ use crate::util::{check_fps, check_positive, progress};
 use anyhow::{bail, Context};
 use morphkit::io::{self, Format, FramesOptions};
 use morphkit::transfer::{
-    correspond, AnimationTransfer, Correspondence, CorrespondenceOptions, GradientCombine, Markers,
-    TransferOptions, TranslationMode, TriangleWeighting,
+    correspond, cycle_consistency, sharp_folds, AnimationTransfer, Correspondence,
+    CorrespondenceOptions, GradientCombine, Markers, RefineOptions, TransferOptions,
+    TranslationMode, TriangleWeighting,
 };
 use morphkit::ShapeSet;
 use serde_json::json;
@@ -52,15 +53,23 @@ pub struct TransferArgs {
     /// Output: a directory of numbered OBJ frames, a .glb/.gltf or a .pc2.
     #[arg(long, value_name = "OUT")]
     pub out: PathBuf,
-    /// Write a JSON report (timings for correspondence, factorization and per-frame solves).
+    /// Write a JSON report (timings for correspondence, factorization and per-frame solves,
+    /// flipped triangles and sharp folds per frame; with --markers also the cycle
+    /// consistency: every frame there and back with the markers reversed, which costs a second
+    /// correspondence and twice the solves).
     #[arg(long, value_name = "JSON")]
     pub report: Option<PathBuf>,
     /// Keep constraint vertices fixed (the paper's convention); optionally name the vertex.
     #[arg(long, value_name = "VERTEX", num_args = 0..=1, allow_negative_numbers = true)]
     pub fixed_vertex: Option<Option<i64>>,
-    /// How gradients of several matched source triangles combine: mean or nearest.
-    #[arg(long, default_value = "mean", value_parser = ["mean", "nearest"])]
+    /// How gradients of several matched source triangles combine: inverse-distance (weights
+    /// 1/d; exact on a mesh onto itself), mean, or nearest.
+    #[arg(long, default_value = "inverse-distance", value_parser = ["inverse-distance", "mean", "nearest"])]
     pub combine: String,
+    /// With --markers: refine the correspondence by closest points (Sumner & Popović 2004,
+    /// Sec. 5) before matching.
+    #[arg(long)]
+    pub refine: bool,
     /// Weight triangles by area instead of uniformly (Eq. 6).
     #[arg(long)]
     pub area_weighted: bool,
@@ -111,7 +120,8 @@ fn options(args: &TransferArgs) -> anyhow::Result<TransferOptions> {
     }
     o.combine = match args.combine.as_str() {
         "nearest" => GradientCombine::Nearest,
-        _ => GradientCombine::Mean,
+        "mean" => GradientCombine::Mean,
+        _ => GradientCombine::InverseDistance,
     };
     if args.area_weighted {
         o.solver.weighting = TriangleWeighting::Area;
@@ -174,21 +184,23 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         "frames": frames.len(),
         "out": args.out,
     });
+    let mut cycle = None;
     let corr = match (&args.markers, &args.correspondence) {
         (Some(m), _) => {
             let markers = Markers::read(m)?;
             crate::util::announce_work("computing the correspondence", target.num_vertices());
             let t0 = Instant::now();
-            let r = correspond(
-                &source_ref,
-                &target,
-                &markers,
-                &CorrespondenceOptions::default(),
-            )
-            .context("correspondence")?;
+            let copts = CorrespondenceOptions {
+                refine: args.refine.then(RefineOptions::default),
+                ..Default::default()
+            };
+            let r = correspond(&source_ref, &target, &markers, &copts).context("correspondence")?;
             let secs = t0.elapsed().as_secs_f64();
             print_summary(&r, secs);
             report["correspondence"] = summary(&r, secs);
+            if args.report.is_some() {
+                cycle = Some((markers, copts));
+            }
             r.correspondence
         }
         (None, Some(c)) => {
@@ -219,6 +231,8 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
     let mut out = Vec::with_capacity(frames.len());
     let (mut solve_total, mut solve_max, mut grad_total) = (0.0f64, 0.0f64, 0.0f64);
     let mut flips = Vec::with_capacity(frames.len());
+    let mut sharp = Vec::with_capacity(frames.len());
+    let topo_t = morphkit::mesh::Topology::new(target.num_vertices(), &target.triangles);
     for i in 0..frames.len() {
         let f = frames.positions(i);
         let t1 = Instant::now();
@@ -235,6 +249,9 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         solve_total += solve;
         solve_max = solve_max.max(solve);
         flips.push(tr.flipped_triangles(&x, &g).len());
+        if args.report.is_some() {
+            sharp.push(sharp_folds(&target, &topo_t, &x));
+        }
         out.push((format!("frame_{i:04}"), x));
         pb.inc(1);
     }
@@ -271,6 +288,33 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         report["target_triangles"] = json!(target.num_triangles());
         report["constraint_vertices"] = json!(tr.solver().constraint_vertices());
         report["flipped_triangles_per_frame"] = json!(flips);
+        report["sharp_folds_per_frame"] = json!(sharp);
+        if let Some((markers, copts)) = cycle {
+            // There and back with the reversed markers (quality without a reference answer).
+            let t0 = Instant::now();
+            let back = correspond(&target, &source_ref, &markers.reversed(), &copts)
+                .context("correspondence of the way back (cycle consistency)")?;
+            let c = cycle_consistency(
+                &source_ref,
+                frames.all_positions(),
+                &target,
+                &corr,
+                &back.correspondence,
+                &opts,
+            )
+            .context("cycle consistency")?;
+            eprintln!(
+                "cycle consistency (there and back): mean {:.3e}, max {:.3e} of the source diagonal",
+                c.mean, c.max
+            );
+            report["cycle_consistency"] = json!({
+                "mean_relative": c.mean,
+                "max_relative": c.max,
+                "frame_mean_relative": c.frame_mean,
+                "frame_max_relative": c.frame_max,
+                "seconds": t0.elapsed().as_secs_f64(),
+            });
+        }
         outputs.json(r, &report)?;
     }
     outputs.commit()?;

@@ -118,7 +118,9 @@ pub struct SynthOptions {
     pub kappa: f64,
     /// Options of the one transfer solve.
     pub solver: SolverOptions,
-    /// How several matched source triangles combine. Default mean.
+    /// How several matched source triangles combine. Default: the transfer's default
+    /// ([`GradientCombine::default`], inverse-distance weights), so that a synthesis with one
+    /// whole-mesh layer is plain transfer.
     pub combine: GradientCombine,
     /// Translation: follow a layer's markers (default) or keep the constraint vertex fixed.
     pub translation: TranslationMode,
@@ -137,7 +139,7 @@ impl Default for SynthOptions {
             gamma: GAMMA,
             kappa: KAPPA,
             solver: SolverOptions::default(),
-            combine: GradientCombine::Mean,
+            combine: GradientCombine::default(),
             translation: TranslationMode::FollowMarkers,
             follow_layer: None,
             rest: None,
@@ -185,6 +187,7 @@ pub struct Synthesizer {
     follow: Option<usize>,
     frames: usize,
     factor_seconds: f64,
+    combine: GradientCombine,
 }
 
 fn layer_info(
@@ -330,6 +333,7 @@ impl Synthesizer {
             follow,
             frames: opts.frames,
             factor_seconds,
+            combine: opts.combine,
         };
         for (i, p) in poses.iter().enumerate() {
             synth.edit_pose(p).map_err(|e| SynthError::InPose {
@@ -430,11 +434,7 @@ impl Synthesizer {
                 *a = blend_gradient(a, b, frac);
             }
         }
-        Ok(Some(
-            layer
-                .correspondence
-                .map_gradients(&g, GradientCombine::Mean),
-        ))
+        Ok(Some(layer.correspondence.map_gradients(&g, self.combine)))
     }
 
     /// The wanted gradients $N_t$ of output frame `f` (module doc, steps 1–3).

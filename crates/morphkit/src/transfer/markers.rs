@@ -30,6 +30,11 @@ impl Markers {
         Self { pairs }
     }
 
+    /// The same pairs with source and target swapped (`[t, s]`), for the way back.
+    pub fn reversed(&self) -> Self {
+        Self::new(self.pairs.iter().map(|&[s, t]| [t, s]).collect())
+    }
+
     /// Parses the JSON marker format.
     pub fn from_json(text: &str) -> Result<Self, MarkerError> {
         #[derive(Deserialize)]

@@ -18,6 +18,8 @@ pub mod kdtree;
 pub mod laplacian;
 pub mod lsmesh;
 pub mod markers;
+pub mod quality;
+pub mod rig;
 pub mod solve;
 #[cfg(test)]
 pub(crate) mod testmesh;
@@ -27,11 +29,16 @@ pub use animation::{
 };
 pub use correspondence::{
     correspond, Correspondence, CorrespondenceOptions, CorrespondenceResult, GradientCombine,
-    MarkerResidual,
+    MarkerResidual, RefineOptions, RefineStep,
 };
 pub use error::{CorrespondenceError, MarkerError, Side, TransferError};
 pub use gradients::{deformation_gradients, flipped_triangles, GradientOperator};
 pub use laplacian::{mean_value_laplacian, LaplacianOptions, MeanValueLaplacian};
 pub use lsmesh::{least_squares_mesh, LeastSquaresMesh, LsMeshOptions, OMEGA};
 pub use markers::{Markers, MIN_MARKERS};
+pub use quality::{
+    correspondence_quality, cycle_consistency, fold_count, sharp_folds, CorrespondenceQuality,
+    CycleConsistency, FoldCount,
+};
+pub use rig::{transfer_rig, RigOptions, RigTransfer, TransferredShape};
 pub use solve::{SolverOptions, TransferSolver, TriangleWeighting};

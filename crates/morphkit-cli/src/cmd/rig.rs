@@ -1,0 +1,293 @@
+//! `morphkit rig`: move a blendshape rig (a neutral and named expressions) onto another
+//! character as named glTF morph targets, one deformation transfer per expression
+//! ([`morphkit::transfer::rig`]).
+
+use super::correspond::{print_summary, summary};
+use crate::outputs::{Kind, Plan};
+use anyhow::{bail, Context};
+use morphkit::io::{self, Format, GltfMorphs};
+use morphkit::transfer::{
+    correspond, Correspondence, CorrespondenceOptions, GradientCombine, Markers, RefineOptions,
+    RigOptions, RigTransfer,
+};
+use morphkit::{ShapeSet, TriMesh};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+const EXAMPLES: &str = "\
+Examples:
+  morphkit rig --source-neutral neutral.obj --source-shapes 'expr/*.obj' --target head.obj \\
+      --markers markers.json --out head-rig.glb
+  morphkit rig --source-shapes face-rig.glb --target head.obj --correspondence corr.json \\
+      --out head-rig.glb --shapes-dir head-shapes --report rig.json
+
+One morph target per source shape, in the order given (a glob expands sorted by name), named by
+the file stem (jawOpen.obj.gz → jawOpen) or the source GLB's target names. Deltas are relative to
+the target mesh as given (its neutral). The neutral stays where it is (no root motion); a
+target posed differently from the source (rotated, scaled) gets the expressions rotated and
+scaled alike.";
+
+/// Arguments of `morphkit rig`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = EXAMPLES)]
+pub struct RigArgs {
+    /// Source neutral mesh (optional when --source-shapes is a GLB: its base mesh).
+    #[arg(long, value_name = "MESH")]
+    pub source_neutral: Option<PathBuf>,
+    /// Source expressions: mesh files, quoted globs, or one .glb/.gltf with morph targets.
+    #[arg(long, required = true, num_args = 1.., value_name = "SHAPES")]
+    pub source_shapes: Vec<String>,
+    /// Target neutral mesh (the new character).
+    #[arg(long, value_name = "MESH")]
+    pub target: PathBuf,
+    /// Marker pairs (computes the correspondence first).
+    #[arg(long, value_name = "JSON", conflicts_with = "correspondence")]
+    pub markers: Option<PathBuf>,
+    /// A correspondence written by `morphkit correspond`.
+    #[arg(long, value_name = "JSON")]
+    pub correspondence: Option<PathBuf>,
+    /// Output rig: .glb or .gltf, the target with one named morph target per shape.
+    #[arg(long, value_name = "GLB")]
+    pub out: PathBuf,
+    /// Also write every transferred shape as DIR/NAME.obj (the directory is created).
+    #[arg(long, value_name = "DIR")]
+    pub shapes_dir: Option<PathBuf>,
+    /// Write a JSON report (per-shape timings and fold counts).
+    #[arg(long, value_name = "JSON")]
+    pub report: Option<PathBuf>,
+    /// How gradients of several matched source triangles combine.
+    #[arg(long, default_value = "inverse-distance", value_parser = ["inverse-distance", "mean", "nearest"])]
+    pub combine: String,
+    /// With --markers: refine the correspondence by closest points (Sumner & Popović 2004,
+    /// Sec. 5).
+    #[arg(long)]
+    pub refine: bool,
+}
+
+/// The file stem without mesh extensions: `dir/jawOpen.obj.gz` → `jawOpen`.
+fn stem(p: &Path) -> String {
+    let name = p
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let lower = name.to_ascii_lowercase();
+    for ext in [".obj.gz", ".obj", ".ply", ".off", ".glb", ".gltf"] {
+        if lower.ends_with(ext) {
+            return name[..name.len() - ext.len()].to_string();
+        }
+    }
+    name
+}
+
+/// Names must be usable as file names in --shapes-dir and be distinct.
+fn check_names(names: &[String]) -> anyhow::Result<()> {
+    for (i, n) in names.iter().enumerate() {
+        if n.is_empty() || n == "." || n == ".." || n.contains(['/', '\\', '\0']) {
+            bail!("shape {i}: the name '{n}' cannot be a morph-target or file name");
+        }
+        if let Some(j) = names[..i].iter().position(|m| m == n) {
+            bail!("shapes {j} and {i} are both named '{n}'");
+        }
+    }
+    Ok(())
+}
+
+/// The source neutral and its expressions.
+fn read_source(args: &RigArgs, files: &[PathBuf]) -> anyhow::Result<(TriMesh, ShapeSet)> {
+    let glb = match files {
+        [one] if matches!(Format::from_path(one), Some(Format::Glb | Format::Gltf)) => Some(one),
+        _ => None,
+    };
+    if let Some(g) = glb {
+        let m = io::read_gltf_morphs(g)?;
+        if m.targets.is_empty() {
+            bail!("{}: has no morph targets", g.display());
+        }
+        let neutral = match &args.source_neutral {
+            Some(n) => io::read_mesh(n)?,
+            None => m.base.clone(),
+        };
+        let shapes = ShapeSet::new(
+            m.base.clone(),
+            m.target_names.iter().cloned().zip(m.targets).collect(),
+        )?;
+        return Ok((neutral, shapes));
+    }
+    let Some(n) = &args.source_neutral else {
+        bail!("give --source-neutral MESH (needed unless --source-shapes is one .glb/.gltf)");
+    };
+    let neutral = io::read_mesh(n)?;
+    let set = io::read_shape_set(files)?;
+    let named = (0..set.len())
+        .map(|i| (stem(&files[i]), set.positions(i).to_vec()))
+        .collect();
+    Ok((neutral, ShapeSet::new(set.base().clone(), named)?))
+}
+
+/// Runs `morphkit rig`.
+pub fn run(args: &RigArgs) -> anyhow::Result<()> {
+    let t_all = Instant::now();
+    if args.markers.is_none() && args.correspondence.is_none() {
+        bail!("give --markers JSON or --correspondence JSON");
+    }
+    if !matches!(
+        Format::from_path(&args.out),
+        Some(Format::Glb | Format::Gltf)
+    ) {
+        bail!(
+            "--out {}: a rig is written as .glb or .gltf",
+            args.out.display()
+        );
+    }
+    let expanded = super::convert::expand(&args.source_shapes)?;
+    let files = expanded.files;
+    let mut inputs = expanded.protected;
+    inputs.extend([args.target.clone()]);
+    inputs.extend(args.source_neutral.iter().cloned());
+    inputs.extend(args.markers.iter().cloned());
+    inputs.extend(args.correspondence.iter().cloned());
+    crate::util::announce_reading(&inputs);
+    let (neutral, shapes) = read_source(args, &files)?;
+    check_names(shapes.names())?;
+    if let Some(d) = &args.shapes_dir {
+        if !d.exists() {
+            std::fs::create_dir_all(d)
+                .with_context(|| format!("--shapes-dir {}: cannot create it", d.display()))?;
+        }
+    }
+    let shape_paths: Vec<PathBuf> = match &args.shapes_dir {
+        Some(d) => shapes
+            .names()
+            .iter()
+            .map(|n| d.join(format!("{n}.obj")))
+            .collect(),
+        None => Vec::new(),
+    };
+    let mut plan = Plan::new(&inputs)
+        .output("--out", &args.out, Kind::Mesh)
+        .output_opt("--report", args.report.as_ref(), Kind::Json);
+    for p in &shape_paths {
+        plan = plan.output("--shapes-dir", p, Kind::Mesh);
+    }
+    let mut outputs = plan.check()?;
+    let target = io::read_mesh(&args.target)?;
+
+    let mut report = json!({
+        "source_neutral": args.source_neutral,
+        "source_shapes": files,
+        "target": args.target,
+        "out": args.out,
+        "shapes": shapes.len(),
+    });
+    let corr = match (&args.markers, &args.correspondence) {
+        (Some(m), _) => {
+            let markers = Markers::read(m)?;
+            crate::util::announce_work("computing the correspondence", target.num_vertices());
+            let t0 = Instant::now();
+            let copts = CorrespondenceOptions {
+                refine: args.refine.then(RefineOptions::default),
+                ..Default::default()
+            };
+            let r = correspond(&neutral, &target, &markers, &copts).context("correspondence")?;
+            let secs = t0.elapsed().as_secs_f64();
+            print_summary(&r, secs);
+            report["correspondence"] = summary(&r, secs);
+            r.correspondence
+        }
+        (None, Some(c)) => {
+            let text = std::fs::read_to_string(c)
+                .with_context(|| format!("{}: cannot read the correspondence", c.display()))?;
+            let corr =
+                Correspondence::from_json(&text).with_context(|| format!("{}", c.display()))?;
+            report["correspondence"] = json!({ "file": c, "seconds": 0.0 });
+            corr
+        }
+        (None, None) => unreachable!("checked above"),
+    };
+    let mut opts = RigOptions::default();
+    opts.transfer.combine = match args.combine.as_str() {
+        "nearest" => GradientCombine::Nearest,
+        "mean" => GradientCombine::Mean,
+        _ => GradientCombine::InverseDistance,
+    };
+    crate::util::announce_work("factorizing the transfer system", target.num_vertices());
+    let t0 = Instant::now();
+    let rt = RigTransfer::new(&neutral, &target, &corr, &opts)?;
+    rt.transfer()
+        .check_frames(&shapes)
+        .context("source shapes vs. the source neutral")?;
+    let factor_s = t0.elapsed().as_secs_f64();
+    let mut per_shape = Vec::with_capacity(shapes.len());
+    let mut targets = Vec::with_capacity(shapes.len());
+    for i in 0..shapes.len() {
+        let t1 = Instant::now();
+        let (x, folds) = rt
+            .transfer_shape(i, shapes.positions(i))
+            .with_context(|| format!("shape {i} ({})", shapes.name(i)))?;
+        let secs = t1.elapsed().as_secs_f64();
+        let max_delta = x
+            .iter()
+            .zip(&target.positions)
+            .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt())
+            .fold(0.0, f64::max);
+        per_shape.push(json!({
+            "name": shapes.name(i),
+            "seconds": secs,
+            "flipped_triangles": folds.flipped,
+            "sharp_folds": folds.sharp_folds,
+            "max_delta": max_delta,
+        }));
+        targets.push(x);
+    }
+    for (p, x) in shape_paths.iter().zip(&targets) {
+        outputs.mesh(p, &target.with_positions(x.clone()))?;
+    }
+    let rig = GltfMorphs {
+        base: target.clone(),
+        target_names: shapes.names().to_vec(),
+        targets,
+        weight_keys: Vec::new(),
+    };
+    outputs.gltf(&args.out, &rig)?;
+    let total = t_all.elapsed().as_secs_f64();
+    eprintln!(
+        "transferred {} shapes onto {} vertices: factorization {:.3} s, {:.1} ms per shape, {:.2} s in all",
+        shapes.len(),
+        target.num_vertices(),
+        factor_s,
+        1e3 * per_shape
+            .iter()
+            .map(|s| s["seconds"].as_f64().unwrap_or(0.0))
+            .sum::<f64>()
+            / shapes.len().max(1) as f64,
+        total
+    );
+    if let Some(r) = &args.report {
+        report["alignment_scale"] = json!(rt.alignment_scale());
+        report["factorization_s"] = json!(factor_s);
+        report["per_shape"] = json!(per_shape);
+        report["total_s"] = json!(total);
+        report["target_vertices"] = json!(target.num_vertices());
+        outputs.json(r, &report)?;
+    }
+    outputs.commit()?;
+    eprintln!("wrote {}", args.out.display());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stems_and_names() {
+        assert_eq!(stem(Path::new("a/jawOpen.obj.gz")), "jawOpen");
+        assert_eq!(stem(Path::new("mouthSmile_L.OBJ")), "mouthSmile_L");
+        assert_eq!(stem(Path::new("x.y.ply")), "x.y");
+        assert!(check_names(&["a".into(), "b".into()]).is_ok());
+        assert!(check_names(&["a".into(), "a".into()]).is_err());
+        assert!(check_names(&["../x".into()]).is_err());
+        assert!(check_names(&["".into()]).is_err());
+    }
+}

@@ -1,0 +1,155 @@
+//! Issue 9: the quality metrics in `correspond --report` and `transfer --report`, and the
+//! `--refine` / `--one-way` / `--combine` flags, run as the built binary on generated tubes.
+
+mod common;
+use common::*;
+
+use std::path::Path;
+
+/// An open tube (`nu` around, `nv` rings, scaled), bent by `bend` radians, as OBJ.
+fn write_tube(path: &Path, nu: usize, nv: usize, scale: f64, bend: f64) {
+    let h = 4.0;
+    let mut text = String::new();
+    for j in 0..nv {
+        let z = h * j as f64 / (nv - 1) as f64;
+        for i in 0..nu {
+            let a = std::f64::consts::TAU * i as f64 / nu as f64;
+            let (x, y) = (a.cos(), a.sin());
+            let (px, pz) = if bend == 0.0 {
+                (x, z)
+            } else {
+                let r = h / bend;
+                let th = bend * z / h;
+                (r - (r - x) * th.cos(), (r - x) * th.sin())
+            };
+            text += &format!("v {} {} {}\n", scale * px, scale * y, scale * pz);
+        }
+    }
+    let id = |i: usize, j: usize| j * nu + i % nu + 1;
+    for j in 0..nv - 1 {
+        for i in 0..nu {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            text += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
+        }
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+fn json(p: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+#[test]
+fn reports_carry_quality_and_cycle_consistency() {
+    let d = tmp_dir("quality");
+    let src = d.join("src.obj");
+    write_tube(&src, 12, 7, 1.0, 0.0);
+    for (k, b) in [0.4, 1.0].iter().enumerate() {
+        write_tube(&d.join(format!("frame-{k}.obj")), 12, 7, 1.0, *b);
+    }
+    let tgt = d.join("tgt.obj");
+    write_tube(&tgt, 18, 10, 1.5, 0.0);
+    let mut pairs = Vec::new();
+    for (js, jt) in [(0, 0), (3, 9 / 2), (6, 9)] {
+        for q in 0..4 {
+            pairs.push(format!("[{}, {}]", js * 12 + 3 * q, jt * 18 + (18 * q) / 4));
+        }
+    }
+    let markers = d.join("markers.json");
+    std::fs::write(&markers, format!("{{\"pairs\": [{}]}}", pairs.join(", "))).unwrap();
+    let corr = d.join("corr.json");
+    for (flags, refined) in [
+        (vec![], false),
+        (vec!["--refine"], true),
+        (vec!["--one-way"], false),
+    ] {
+        let rep = d.join("corr-report.json");
+        let mut args = vec![
+            "correspond",
+            "--source",
+            s(&src),
+            "--target",
+            s(&tgt),
+            "--markers",
+            s(&markers),
+            "--out",
+            s(&corr),
+            "--report",
+            s(&rep),
+        ];
+        args.extend(flags.iter().copied());
+        ok(&args);
+        let r = json(&rep);
+        let q = &r["quality"];
+        assert_eq!(r["refined"], refined, "{flags:?}");
+        assert!(q["normal_pass_fraction"].as_f64().unwrap() > 0.99, "{r}");
+        let coverage = q["source_coverage"].as_f64().unwrap();
+        if flags.is_empty() || refined {
+            assert_eq!(
+                coverage, 1.0,
+                "{flags:?}: two-way matching reaches every source triangle"
+            );
+        }
+        assert!(q["marker_residual_max"].as_f64().unwrap() < 1e-3);
+    }
+    // The correspondence report's cycle consistency, from the frames given.
+    let rep = d.join("cycle.json");
+    ok(&[
+        "correspond",
+        "--source",
+        s(&src),
+        "--target",
+        s(&tgt),
+        "--markers",
+        s(&markers),
+        "--out",
+        s(&corr),
+        "--report",
+        s(&rep),
+        "--cycle-frames",
+        &format!("{}/frame-*.obj", d.display()),
+    ]);
+    let cyc = &json(&rep)["cycle_consistency"];
+    assert_eq!(cyc["frames"], 2);
+    assert!(cyc["max_relative"].as_f64().unwrap() < 0.1, "{cyc}");
+    let report = d.join("transfer.json");
+    ok(&[
+        "transfer",
+        "--source-ref",
+        s(&src),
+        "--source",
+        &format!("{}/frame-*.obj", d.display()),
+        "--target",
+        s(&tgt),
+        "--markers",
+        s(&markers),
+        "--out",
+        s(&d.join("out")),
+        "--report",
+        s(&report),
+    ]);
+    let r = json(&report);
+    let c = &r["cycle_consistency"];
+    let mean = c["mean_relative"].as_f64().unwrap();
+    let max = c["max_relative"].as_f64().unwrap();
+    assert!(mean > 0.0 && mean <= max && max < 0.1, "{c}");
+    assert_eq!(c["frame_mean_relative"].as_array().unwrap().len(), 2);
+    assert_eq!(r["sharp_folds_per_frame"].as_array().unwrap().len(), 2);
+    let e = fails(&[
+        "transfer",
+        "--source-ref",
+        s(&src),
+        "--source",
+        s(&d.join("frame-0.obj")),
+        "--target",
+        s(&tgt),
+        "--markers",
+        s(&markers),
+        "--out",
+        s(&d.join("out2")),
+        "--combine",
+        "median",
+    ]);
+    assert!(e.contains("median"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -1,0 +1,177 @@
+//! `morphkit rig` (issue 9): a blendshape rig moved onto another mesh, run as the built binary
+//! on generated tubes. The output GLB must carry one morph target per source shape, named by
+//! file stem, in the order given; `--shapes-dir` and `--report` must match it; a bad output
+//! is refused before any work. With `MORPHKIT_GLTF_VALIDATOR` set the GLB goes through the
+//! Khronos validator.
+
+mod common;
+use common::*;
+
+use std::path::Path;
+use std::process::Command;
+
+/// An open tube, bent by `bend` radians and scaled by `scale`, as OBJ.
+fn write_tube(path: &Path, scale: f64, bend: f64) {
+    let (nu, nv, h) = (10, 8, 4.0);
+    let mut text = String::new();
+    for j in 0..nv {
+        let z = h * j as f64 / (nv - 1) as f64;
+        for i in 0..nu {
+            let a = std::f64::consts::TAU * i as f64 / nu as f64;
+            let (x, y) = (a.cos(), a.sin());
+            let (px, pz) = if bend == 0.0 {
+                (x, z)
+            } else {
+                let r = h / bend;
+                let th = bend * z / h;
+                (r - (r - x) * th.cos(), (r - x) * th.sin())
+            };
+            text += &format!("v {} {} {}\n", scale * px, scale * y, scale * pz);
+        }
+    }
+    let id = |i: usize, j: usize| j * nu + i % nu + 1;
+    for j in 0..nv - 1 {
+        for i in 0..nu {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            text += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
+        }
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+#[test]
+fn rig_writes_named_morph_targets_shapes_and_a_report() {
+    let d = tmp_dir("rig");
+    let expr = d.join("expr");
+    std::fs::create_dir_all(&expr).unwrap();
+    write_tube(&d.join("neutral.obj"), 1.0, 0.0);
+    // Names sort as the glob expands them: a_bend, b_small, c_neutral.
+    write_tube(&expr.join("a_bend.obj"), 1.0, 0.8);
+    write_tube(&expr.join("b_small.obj"), 1.0, 0.2);
+    write_tube(&expr.join("c_neutral.obj"), 1.0, 0.0);
+    write_tube(&d.join("target.obj"), 2.0, 0.0);
+    // Identity markers on rings 0, 3 and 7 (the tube's vertices keep their ids).
+    let pairs: Vec<[u32; 2]> = [0u32, 3, 5, 30, 33, 36, 70, 73, 77]
+        .iter()
+        .map(|&v| [v, v])
+        .collect();
+    std::fs::write(
+        d.join("m.json"),
+        serde_json::json!({ "pairs": pairs }).to_string(),
+    )
+    .unwrap();
+    let glob = format!("{}/*.obj", expr.display());
+    let out = d.join("rig.glb");
+    let shapes = d.join("shapes");
+    let report = d.join("rig.json");
+    ok(&[
+        "rig",
+        "--source-neutral",
+        s(&d.join("neutral.obj")),
+        "--source-shapes",
+        &glob,
+        "--target",
+        s(&d.join("target.obj")),
+        "--markers",
+        s(&d.join("m.json")),
+        "--out",
+        s(&out),
+        "--shapes-dir",
+        s(&shapes),
+        "--report",
+        s(&report),
+    ]);
+    let rig = morphkit::io::read_gltf_morphs(&out).unwrap();
+    assert_eq!(rig.target_names, ["a_bend", "b_small", "c_neutral"]);
+    let target = morphkit::io::read_mesh(&d.join("target.obj")).unwrap();
+    assert_eq!(rig.base.positions.len(), target.positions.len());
+    // The neutral shape gives a zero delta (no root motion); the bend moves the tip.
+    let delta = |k: usize| {
+        rig.targets[k]
+            .iter()
+            .zip(&rig.base.positions)
+            .map(|(a, b)| (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt())
+            .fold(0.0, f64::max)
+    };
+    assert!(delta(2) < 1e-5, "neutral delta {}", delta(2));
+    assert!(
+        delta(0) > 0.5 && delta(0) > 2.0 * delta(1),
+        "{} {}",
+        delta(0),
+        delta(1)
+    );
+    for n in ["a_bend", "b_small", "c_neutral"] {
+        let m = morphkit::io::read_mesh(&shapes.join(format!("{n}.obj"))).unwrap();
+        assert_eq!(m.num_vertices(), target.num_vertices());
+    }
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(r["per_shape"].as_array().unwrap().len(), 3);
+    assert_eq!(r["per_shape"][1]["name"], "b_small");
+    assert!(r["per_shape"][0]["seconds"].as_f64().unwrap() >= 0.0);
+    assert!(r["per_shape"][0]["flipped_triangles"].is_u64());
+    if let Some(script) = std::env::var_os("MORPHKIT_GLTF_VALIDATOR") {
+        let st = Command::new("node").arg(script).arg(&out).status().unwrap();
+        assert!(st.success(), "the Khronos validator rejects the rig");
+    }
+    // Same input, same bytes.
+    let again = d.join("again.glb");
+    ok(&[
+        "rig",
+        "--source-neutral",
+        s(&d.join("neutral.obj")),
+        "--source-shapes",
+        &glob,
+        "--target",
+        s(&d.join("target.obj")),
+        "--markers",
+        s(&d.join("m.json")),
+        "--out",
+        s(&again),
+    ]);
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
+    // A GLB with morph targets as the source: its names and base are used.
+    let from_glb = d.join("from-glb.glb");
+    ok(&[
+        "rig",
+        "--source-shapes",
+        s(&out),
+        "--target",
+        s(&d.join("target.obj")),
+        "--markers",
+        s(&d.join("m.json")),
+        "--out",
+        s(&from_glb),
+    ]);
+    let rig2 = morphkit::io::read_gltf_morphs(&from_glb).unwrap();
+    assert_eq!(rig2.target_names, rig.target_names);
+    // Refused before any work: an OBJ rig, a missing neutral.
+    let e = fails(&[
+        "rig",
+        "--source-neutral",
+        s(&d.join("neutral.obj")),
+        "--source-shapes",
+        &glob,
+        "--target",
+        s(&d.join("target.obj")),
+        "--markers",
+        s(&d.join("m.json")),
+        "--out",
+        s(&d.join("rig.obj")),
+    ]);
+    assert!(e.contains(".glb or .gltf"), "{e}");
+    let e = fails(&[
+        "rig",
+        "--source-shapes",
+        &glob,
+        "--target",
+        s(&d.join("target.obj")),
+        "--markers",
+        s(&d.join("m.json")),
+        "--out",
+        s(&d.join("x.glb")),
+    ]);
+    assert!(e.contains("--source-neutral"), "{e}");
+    assert!(!d.join("x.glb").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
