@@ -54,14 +54,15 @@ def _blend_solver(base, targets):
     return c[key]
 
 
-def _transfer_solver(source, target, markers, translation):
-    key = ("transfer", source, target, markers, translation)
+def _transfer_solver(source, target, markers, rig):
+    key = ("rig" if rig else "transfer", source, target, markers)
     c = _cache()
     if key not in c:
         VS, FS = morphkit.read(source)
         VT, FT = morphkit.read(target)
         corr = morphkit.Correspondence.from_markers(VS, FS, VT, FT, markers)
-        c[key] = (morphkit.Transfer(VS, FS, VT, FT, corr, translation=translation), FT)
+        kind = morphkit.RigTransfer if rig else morphkit.Transfer  # a rig has no root motion
+        c[key] = (kind(VS, FS, VT, FT, corr), FT)
     return c[key]
 
 
@@ -71,9 +72,9 @@ def blend_range(base, targets, weights):
     return blend.solve_many(weights)
 
 
-def transfer_range(source, target, markers, frames, translation="follow"):
-    """The given source frame files transferred onto the target: (k, n_t, 3)."""
-    tr, _ = _transfer_solver(source, target, markers, translation)
+def transfer_range(source, target, markers, frames, rig=False):
+    """The given source frame (or rig shape) files transferred onto the target: (k, n_t, 3)."""
+    tr, _ = _transfer_solver(source, target, markers, rig)
     return tr.transfer_many([morphkit.read(f)[0] for f in frames])
 
 
@@ -93,11 +94,10 @@ def submit(client, job, root, chunk):
         ]
     elif kind in ("transfer", "rig"):
         frames = [p(f) for f in job["frames" if kind == "transfer" else "shapes"]]
-        translation = "follow" if kind == "transfer" else "fixed"  # a rig has no root motion
         futs = [
             client.submit(
                 transfer_range, p(job["source"]), p(job["target"]), p(job["markers"]), fr,
-                translation, pure=False,
+                kind == "rig", pure=False,
             )
             for fr in _chunks(frames, chunk)
         ]

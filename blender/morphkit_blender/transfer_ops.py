@@ -159,7 +159,7 @@ class MORPHKIT_OT_transfer_rig(bpy.types.Operator):
             if src.data.shape_keys is None or len(src.data.shape_keys.key_blocks) < 2:
                 raise ValueError("the source has no shape keys to transfer")
             VS, FS, VT, FT, corr = correspondence(scene, src, tgt)
-            tr = morphkit.Transfer(VS, FS, VT, FT, corr, translation="fixed")
+            tr = morphkit.RigTransfer(VS, FS, VT, FT, corr)
             keys = list(src.data.shape_keys.key_blocks[1:])
             out = tr.transfer_many([geometry.key_coords(k) for k in keys])
         except (ValueError, morphkit.MorphkitError) as e:

@@ -276,7 +276,7 @@ render("transfer", dog)
 check(bpy.ops.morphkit.transfer_rig() == {"FINISHED"}, "transfer_rig failed")
 names = [k.name for k in dog.data.shape_keys.key_blocks]
 check(all(f"run{i}" in names for i in range(4)), f"rig keys {names}")
-rig_ref = morphkit.Transfer(CS, CFb, DT, DFb, corr, translation="fixed").transfer_many(run)
+rig_ref = morphkit.RigTransfer(CS, CFb, DT, DFb, corr).transfer_many(run)
 err = max(
     float(np.abs(geometry.key_coords(dog.data.shape_keys.key_blocks[f"run{i}"]) - rig_ref[i]).max())
     for i in range(4)

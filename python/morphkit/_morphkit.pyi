@@ -102,7 +102,7 @@ class Transfer:
         ft: ArrayLike,
         correspondence: Correspondence,
         *,
-        combine: str = "mean",
+        combine: str = "inverse-distance",
         translation: str = "follow",
     ) -> None: ...
     def transfer(self, frame: ArrayLike) -> Vertices: ...
@@ -159,3 +159,17 @@ class SceneBlend:
     def solve(self, weights: Union[float, Sequence[float]], *, frame: float = 0.0, convex: bool = False) -> Vertices: ...
     @property
     def last_stats(self) -> Optional[Dict[str, Any]]: ...
+
+class RigTransfer:
+    def __init__(
+        self,
+        vs: ArrayLike,
+        fs: ArrayLike,
+        vt: ArrayLike,
+        ft: ArrayLike,
+        correspondence: Correspondence,
+        *,
+        combine: str = "inverse-distance",
+    ) -> None: ...
+    def transfer(self, shape: ArrayLike) -> Vertices: ...
+    def transfer_many(self, shapes: Union[ArrayLike, Sequence[ArrayLike]]) -> Frames: ...

@@ -35,5 +35,6 @@ fn _morphkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scene::PySceneBlend>()?;
     m.add_class::<transfer::PyCorrespondence>()?;
     m.add_class::<transfer::PyTransfer>()?;
+    m.add_class::<transfer::PyRigTransfer>()?;
     Ok(())
 }

@@ -6,6 +6,7 @@ use crate::arrays::{self, to_array, to_array3};
 use crate::dict::to_dict;
 use crate::errors::{new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
+use morphkit::transfer::rig::{RigOptions, RigTransfer};
 use morphkit::transfer::{
     correspond, AnimationTransfer, Correspondence, CorrespondenceOptions, GradientCombine, Markers,
     TransferOptions, TranslationMode,
@@ -164,8 +165,8 @@ impl PyCorrespondence {
 /// A deformation transfer from a source reference `(VS, FS)` onto a target `(VT, FT)`, set up
 /// once (the target's normal equations are factored), then :meth:`transfer` per frame.
 ///
-/// `combine`: `"mean"` (default) or `"nearest"`, how several matched source gradients
-/// combine. `translation`: `"follow"` (default; the target's marker centroid follows the
+/// `combine`: `"inverse-distance"` (default, as the CLI), `"mean"` or `"nearest"`, how several
+/// matched source gradients combine. `translation`: `"follow"` (default; the target's marker centroid follows the
 /// source's, scaled by the size ratio) or `"fixed"` (the paper's convention).
 ///
 /// >>> t = morphkit.Transfer(VS, FS, VT, FT, c)
@@ -177,10 +178,25 @@ pub struct PyTransfer {
     target_vertices: usize,
 }
 
+fn combine_of(name: &str) -> PyResult<GradientCombine> {
+    match name {
+        "inverse-distance" => Ok(GradientCombine::InverseDistance),
+        "mean" => Ok(GradientCombine::Mean),
+        "nearest" => Ok(GradientCombine::Nearest),
+        other => Err(new_err(
+            Kind::Transfer,
+            format!(
+                "combine: expected \"inverse-distance\", \"mean\" or \"nearest\", got {other:?}"
+            ),
+        )),
+    }
+}
+
 #[pymethods]
 impl PyTransfer {
     #[new]
-    #[pyo3(signature = (vs, fs, vt, ft, correspondence, *, combine="mean", translation="follow"))]
+    #[pyo3(signature = (vs, fs, vt, ft, correspondence, *, combine="inverse-distance",
+        translation="follow"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -194,16 +210,7 @@ impl PyTransfer {
     ) -> PyResult<Self> {
         let source = from_arrays("source", vs, fs)?;
         let target = from_arrays("target", vt, ft)?;
-        let combine = match combine {
-            "mean" => GradientCombine::Mean,
-            "nearest" => GradientCombine::Nearest,
-            other => {
-                return Err(new_err(
-                    Kind::Transfer,
-                    format!("combine: expected \"mean\" or \"nearest\", got {other:?}"),
-                ))
-            }
-        };
+        let combine = combine_of(combine)?;
         let translation = match translation {
             "follow" => TranslationMode::FollowMarkers,
             "fixed" => TranslationMode::FixedVertex,
@@ -279,5 +286,88 @@ impl PyTransfer {
             "Transfer(source_vertices={}, target_vertices={})",
             self.source_vertices, self.target_vertices
         )
+    }
+}
+
+/// A blendshape rig moved onto a new character (`morphkit rig`): the source neutral
+/// `(VS, FS)` is aligned to the target `(VT, FT)` by the best similarity through the
+/// correspondence's markers, the target is factored once, and each expression (positions over
+/// the source neutral's connectivity) becomes a target shape with no root motion: the target's
+/// neutral stays where it is, per connected part.
+///
+/// >>> rig = morphkit.RigTransfer(VN, FN, VH, FH, corr)
+/// >>> shapes = rig.transfer_many([V_jawOpen, V_smile])  # (2, n_t, 3), absolute positions
+#[pyclass(name = "RigTransfer", module = "morphkit", frozen)]
+pub struct PyRigTransfer {
+    inner: RigTransfer,
+    source_vertices: usize,
+    target_vertices: usize,
+}
+
+#[pymethods]
+impl PyRigTransfer {
+    #[new]
+    #[pyo3(signature = (vs, fs, vt, ft, correspondence, *, combine="inverse-distance"))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        vs: &Bound<'_, PyAny>,
+        fs: &Bound<'_, PyAny>,
+        vt: &Bound<'_, PyAny>,
+        ft: &Bound<'_, PyAny>,
+        correspondence: &PyCorrespondence,
+        combine: &str,
+    ) -> PyResult<Self> {
+        let source = from_arrays("source", vs, fs)?;
+        let target = from_arrays("target", vt, ft)?;
+        let opts = RigOptions {
+            transfer: TransferOptions {
+                combine: combine_of(combine)?,
+                ..TransferOptions::default()
+            },
+        };
+        let corr = &correspondence.inner;
+        let inner = py
+            .detach(|| RigTransfer::new(&source, &target, corr, &opts))
+            .py(Kind::Transfer)?;
+        Ok(Self {
+            inner,
+            source_vertices: source.num_vertices(),
+            target_vertices: target.num_vertices(),
+        })
+    }
+
+    /// One expression `(n_s, 3)` onto the target: a new `(n_t, 3)` array.
+    fn transfer<'py>(
+        &self,
+        py: Python<'py>,
+        shape: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let shape = arrays::points("shape", shape)?;
+        let inner = &self.inner;
+        let (x, _) = py
+            .detach(|| inner.transfer_shape(0, &shape))
+            .py(Kind::Transfer)?;
+        Ok(to_array(py, &x))
+    }
+
+    /// Every expression of `shapes` (`(k, n_s, 3)` or a list) onto the target: `(k, n_t, 3)`.
+    fn transfer_many<'py>(
+        &self,
+        py: Python<'py>,
+        shapes: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let shapes = arrays::frames("shapes", shapes, Some(self.source_vertices))?;
+        let inner = &self.inner;
+        let out = py
+            .detach(|| {
+                shapes
+                    .iter()
+                    .enumerate()
+                    .map(|(i, s)| inner.transfer_shape(i, s).map(|(x, _)| x))
+                    .collect::<Result<Vec<_>, _>>()
+            })
+            .py(Kind::Transfer)?;
+        Ok(to_array3(py, &out, self.target_vertices))
     }
 }

@@ -86,3 +86,33 @@ def test_cat_dog_equals_the_cli(tmp_path, cli, cat_dog):
     )
     theirs, _, _ = morphkit.read_animation(out)
     assert np.abs(ours - theirs[:4]).max() <= 1e-9 * diag(VT)
+
+
+def test_rig_onto_a_rotated_scaled_copy_and_equal_to_the_cli(tmp_path, cli):
+    V, F = tube()
+    shapes = np.stack([bend(V, 0.6), bend(V, 1.2)])
+    c, s = np.cos(0.7), np.sin(0.7)
+    R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    scale, shift = 1.7, np.array([3.0, -1.0, 0.5])
+    VT = scale * V @ R.T + shift
+    corr = morphkit.Correspondence.identity(V, F)
+    rig = morphkit.RigTransfer(V, F, VT, F, corr)
+    out = rig.transfer_many(shapes)
+    expected = scale * shapes @ R.T + shift  # the neutral stays: vertex 0 is fixed by the bend
+    assert np.abs(out - expected).max() < 1e-8 * diag(VT)
+    np.testing.assert_array_equal(rig.transfer(shapes[1]), out[1])
+    with pytest.raises(morphkit.TransferError, match="vertices"):
+        rig.transfer(V[:-1])
+    # The CLI writes the same shapes as named morph targets.
+    morphkit.write(tmp_path / "neutral.obj", V, F)
+    morphkit.write(tmp_path / "head.obj", VT, F)
+    for name, X in zip(("smile", "frown"), shapes):
+        morphkit.write(tmp_path / f"{name}.obj", X, F)
+    corr.save(tmp_path / "c.json")
+    cli("rig", "--source-neutral", tmp_path / "neutral.obj",
+        "--source-shapes", tmp_path / "smile.obj", tmp_path / "frown.obj",
+        "--target", tmp_path / "head.obj", "--correspondence", tmp_path / "c.json",
+        "--out", tmp_path / "rig.glb")
+    _, _, T, names = morphkit.read_morphs(tmp_path / "rig.glb")
+    assert names == ["smile", "frown"]
+    assert np.abs(T - out).max() < 1e-6 * diag(VT)  # glTF stores float32
