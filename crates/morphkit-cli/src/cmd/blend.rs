@@ -380,10 +380,13 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     if single_mesh {
         outputs.mesh(&a.out, &out_set.mesh(0))?;
     } else {
-        let opts = FramesOptions {
+        let mut opts = FramesOptions {
             fps: a.fps,
             inputs: inputs.clone(),
+            ..FramesOptions::default()
         };
+        opts.gltf.extras =
+            Some(json!({ "weights": weights.iter().map(weights_json).collect::<Vec<_>>() }));
         outputs.frames(&a.out, &out_set, &opts, |_| {})?;
     }
     let write_seconds = t_write.elapsed().as_secs_f64();

@@ -179,7 +179,8 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         .check()?;
     let opts = FramesOptions {
         fps: args.fps,
-        inputs: protected,
+        inputs: protected.clone(),
+        ..FramesOptions::default()
     };
     if sequence {
         let frames = read_sequence(&inputs)?;
@@ -200,7 +201,7 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         morphkit::mesh::validate(&rig.base)
             .map_err(|e| anyhow::anyhow!("{}: {e}", input.display()))?;
         let mut outputs = outputs;
-        outputs.gltf(&out, &rig)?;
+        outputs.gltf(&out, &rig, &protected)?;
         outputs.commit()?;
         eprintln!(
             "wrote {}: {} vertices, {} morph targets, {} animation keys",
