@@ -6,7 +6,9 @@
 //! vertices of the primitives before), node transforms are ignored (positions are the mesh's
 //! own), the morph targets' `POSITION` displacements become absolute target positions, names
 //! come from `mesh.extras.targetNames`, and the first animation channel that drives the
-//! `weights` of a node using that mesh gives the weight keys.
+//! `weights` of a node using that mesh gives the weight keys. A long animation that
+//! [`write_gltf_with`] split into several meshes (their `extras.morphkitTargets`) is read back
+//! as one rig: every target once, the windows' keys merged in time order.
 //!
 //! Writing ([`write_gltf_with`], or [`write_gltf_morphs`] with the default [`GltfOptions`])
 //! produces one buffer (the GLB `BIN` chunk, or a base64 data URI in a `.gltf`, so the output
