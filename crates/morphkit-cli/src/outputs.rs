@@ -492,6 +492,26 @@ impl Outputs {
         Ok(())
     }
 
+    /// Stages a rig as `UsdSkel` blend shapes named after its targets, with the run's names and
+    /// custom layer data ([`frames_options`]).
+    pub fn usd_blendshapes(
+        &mut self,
+        path: &Path,
+        rig: &GltfMorphs,
+        inputs: &[PathBuf],
+    ) -> anyhow::Result<()> {
+        let opts = frames_options(
+            &FramesOptions {
+                inputs: inputs.to_vec(),
+                ..FramesOptions::default()
+            },
+            0,
+        );
+        Ok(self.staging.write(path, false, |tmp| {
+            io::write_usd_blendshapes(tmp, &rig.base, &rig.targets, &rig.target_names, &opts.usd)
+        })?)
+    }
+
     /// Stages an animation (a frame directory, `.glb`/`.gltf`, `.pc2` or `.usda`), calling
     /// `on_frame(i)` after each OBJ frame; names, flags and extras as [`frames_options`].
     pub fn frames(
