@@ -277,3 +277,20 @@ fn split_and_unsplit_files_pass_the_khronos_validator() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn a_corrupt_split_rig_is_an_error_naming_the_file() {
+    let d = tmp_dir("corrupt");
+    let p = d.join("s.gltf");
+    io::write_frames(&p, &tube_frames(12), &opts(4)).unwrap();
+    let mut doc: Value = serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+    doc["meshes"][1]["extras"]["morphkitTargets"][0] = serde_json::json!(u64::MAX);
+    std::fs::write(&p, doc.to_string()).unwrap();
+    let e = io::read_gltf_morphs(&p).unwrap_err().to_string();
+    assert!(e.contains("s.gltf") && e.contains("morphkitTargets"), "{e}");
+    doc["meshes"][1]["extras"]["morphkitTargets"] = serde_json::json!([0, 1]);
+    std::fs::write(&p, doc.to_string()).unwrap();
+    let e = io::read_gltf_morphs(&p).unwrap_err().to_string();
+    assert!(e.contains("s.gltf") && e.contains("mesh 1"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -180,3 +180,31 @@ fn blend_shapes_are_named_usdskel_targets() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn malformed_usda_is_an_error_naming_the_file_not_a_panic() {
+    let d = tmp_dir("bad");
+    let cases = [
+        ("nohdr.usda", "def Mesh \"m\" {}"),
+        ("nomesh.usda", "#usda 1.0\ndef Xform \"x\" {}\n"),
+        (
+            "huge.usda",
+            "#usda 1.0\ndef Mesh \"m\" {\nint[] faceVertexCounts = [1e300]\nint[] faceVertexIndices = [0, 1, 2]\npoint3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n}\n",
+        ),
+        (
+            "range.usda",
+            "#usda 1.0\ndef Mesh \"m\" {\nint[] faceVertexCounts = [3]\nint[] faceVertexIndices = [0, 1, 7]\npoint3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n}\n",
+        ),
+        (
+            "nan.usda",
+            "#usda 1.0\ndef Mesh \"m\" {\nint[] faceVertexCounts = [3]\nint[] faceVertexIndices = [0, 1, 2]\npoint3f[] points = [(0, 0, 0), (nan, 0, 0), (0, 1, 0)]\n}\n",
+        ),
+    ];
+    for (name, text) in cases {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        let e = io::read_mesh(&p).unwrap_err().to_string();
+        assert!(e.contains(name), "{name}: {e}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

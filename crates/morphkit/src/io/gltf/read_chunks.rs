@@ -39,7 +39,19 @@ pub(super) fn read_split(
         .iter()
         .flat_map(|(_, r)| r.iter().copied())
         .max()
-        .map_or(0, |i| i + 1);
+        .map_or(0, |i| i.saturating_add(1));
+    // Every rig index must be held by some part, so there are at most as many as listed (this
+    // also bounds the allocations below by the file's own size).
+    let listed: usize = parts.iter().map(|(_, r)| r.len()).sum();
+    if n > listed {
+        return Err(IoError::content(
+            path,
+            format!(
+                "split rig: extras.morphkitTargets names target {}, but the parts list only {listed} targets",
+                n - 1
+            ),
+        ));
+    }
     let nv = base.len();
     let mut names = vec![String::new(); n];
     let mut targets: Vec<Option<Vec<Point>>> = vec![None; n];

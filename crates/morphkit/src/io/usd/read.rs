@@ -182,7 +182,7 @@ pub fn parse_usd_animation(path: &Path, text: &str) -> Result<UsdAnimation, IoEr
     let mut next = 0usize;
     for (f, &n) in counts.iter().enumerate() {
         let n = n as usize;
-        if n < 3 || next + n > indices.len() {
+        if n < 3 || n > indices.len() - next {
             return Err(IoError::content(
                 path,
                 format!(
