@@ -459,9 +459,17 @@ impl Outputs {
             .write(path, false, |tmp| io::write_ply_colored(tmp, mesh, colors))?)
     }
 
-    /// Stages a glTF rig (target names kept), with the run's names, flags and extras
-    /// ([`frames_options`]); warns on stderr about what viewers may not play.
-    pub fn gltf(
+    /// Stages a glTF rig (target names kept) with the run's flags and extras, named `morphkit`;
+    /// see [`Outputs::gltf_from`] to name it after the inputs.
+    // Kept with its signature for the commands written against it (issue 9's `rig`).
+    #[allow(dead_code)]
+    pub fn gltf(&mut self, path: &Path, rig: &GltfMorphs) -> anyhow::Result<()> {
+        self.gltf_from(path, rig, &[])
+    }
+
+    /// Stages a glTF rig (target names kept), with the run's names (after `inputs`), flags and
+    /// extras ([`frames_options`]); warns on stderr about what viewers may not play.
+    pub fn gltf_from(
         &mut self,
         path: &Path,
         rig: &GltfMorphs,

@@ -226,7 +226,7 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         morphkit::mesh::validate(&rig.base)
             .map_err(|e| anyhow::anyhow!("{}: {e}", input.display()))?;
         let mut outputs = outputs;
-        outputs.gltf(&out, &rig, &protected)?;
+        outputs.gltf_from(&out, &rig, &protected)?;
         outputs.commit()?;
         eprintln!(
             "wrote {}: {} vertices, {} morph targets, {} animation keys",
