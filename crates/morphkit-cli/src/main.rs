@@ -13,13 +13,15 @@ use clap::{Parser, Subcommand};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    #[command(flatten)]
+    output: outputs::OutputFlags,
 }
 
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Describe meshes: counts, size, boundary, components, shared connectivity.
     Info(cmd::info::InfoArgs),
-    /// Convert between OBJ, PLY, OFF, glTF/GLB and PC2, single meshes or frame sequences.
+    /// Convert between OBJ, PLY, OFF, glTF/GLB, PC2 and USD, single meshes or frame sequences.
     Convert(cmd::convert::ConvertArgs),
     /// Run the main job on a built-in example: physical vs. linear blend of a bent bar.
     Demo(cmd::demo::DemoArgs),
@@ -41,6 +43,18 @@ enum Command {
 
 fn main() {
     let cli = Cli::parse();
+    let name = match &cli.command {
+        Command::Info(_) => "info",
+        Command::Convert(_) => "convert",
+        Command::Demo(_) => "demo",
+        Command::Blend(_) => "blend",
+        Command::Correspond(_) => "correspond",
+        Command::Transfer(_) => "transfer",
+        Command::Flex(_) => "flex",
+        Command::Synth(_) => "synth",
+        Command::Bench(_) => "bench",
+    };
+    outputs::set_context(cli.output.clone(), name);
     let result = match &cli.command {
         Command::Info(a) => cmd::info::run(a),
         Command::Convert(a) => cmd::convert::run(a),

@@ -17,17 +17,160 @@
 //! as it was.
 
 use anyhow::bail;
-use morphkit::io::{self, Format, FramesOptions, GltfMorphs, Staging};
+use morphkit::io::{self, Format, FramesOptions, GltfMorphs, GltfOptions, Staging};
 use morphkit::{ShapeSet, TriMesh};
+use serde_json::json;
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+/// Options of every written animation, accepted by every subcommand (`global` clap arguments).
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct OutputFlags {
+    /// Most morph targets per mesh in a .glb/.gltf animation (default 200, what WebGL2 viewers
+    /// such as three.js play). A longer animation is split into meshes of at most N targets,
+    /// shown in turn by node scale; 0 never splits (a warning says when viewers will not play
+    /// it).
+    #[arg(long, global = true, value_name = "N")]
+    pub max_targets: Option<usize>,
+    /// Leave vertex normals and normal deltas out of .glb/.gltf output (smaller, shades flat).
+    #[arg(long, global = true)]
+    pub no_normals: bool,
+}
+
+/// What every output of this run is stamped with: the flags, the subcommand and the command
+/// line.
+#[derive(Clone, Debug, Default)]
+struct Context {
+    flags: OutputFlags,
+    subcommand: String,
+    command: String,
+}
+
+static CONTEXT: OnceLock<Context> = OnceLock::new();
+
+/// Records the output flags, the subcommand name and the command line (call once, from main).
+pub fn set_context(flags: OutputFlags, subcommand: &str) {
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let _ = CONTEXT.set(Context {
+        flags,
+        subcommand: subcommand.to_string(),
+        command,
+    });
+}
+
+fn context() -> Context {
+    CONTEXT.get().cloned().unwrap_or_default()
+}
+
+/// The stem of a path without mesh extensions (`horse-07.obj.gz` → `horse-07`).
+fn stem(p: &Path) -> String {
+    let name = p
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    io::shape_name(&name).to_string()
+}
+
+/// The name of what the inputs hold: the longest prefix shared by at least two input stems
+/// (without trailing digits and separators: `horse-gallop-01` … `horse-gallop-48` give
+/// `horse-gallop`), else the first input's stem, else `morphkit`.
+pub fn sequence_name(inputs: &[PathBuf]) -> String {
+    let stems: Vec<String> = inputs
+        .iter()
+        .map(|p| stem(p))
+        .filter(|s| !s.is_empty())
+        .collect();
+    let trim = |s: &str| {
+        s.trim_end_matches(|c: char| c.is_ascii_digit() || matches!(c, '-' | '_' | '.' | ' '))
+            .to_string()
+    };
+    let mut best = String::new();
+    for (i, a) in stems.iter().enumerate() {
+        for b in &stems[i + 1..] {
+            let n = a
+                .char_indices()
+                .zip(b.chars())
+                .take_while(|((_, x), y)| x == y)
+                .last()
+                .map_or(0, |((k, x), _)| k + x.len_utf8());
+            let p = trim(&a[..n]);
+            if p.len() > best.len() {
+                best = p;
+            }
+        }
+    }
+    if best.is_empty() {
+        best = stems.first().map_or_else(String::new, |s| trim(s));
+    }
+    if best.is_empty() {
+        "morphkit".into()
+    } else {
+        best
+    }
+}
+
+/// `opts` with what the run knows filled in where it still has the default: glTF and USD
+/// names (the inputs' [`sequence_name`]; the clip is `NAME-SUBCOMMAND`, or `NAME` for
+/// `convert`), the output flags, and extras / custom layer data with the command line, the
+/// subcommand, the source files, the frame rate and the frame count (merged into extras the
+/// command set, such as blend weights per frame).
+pub fn frames_options(opts: &FramesOptions, frames: usize) -> FramesOptions {
+    let ctx = context();
+    let mut o = opts.clone();
+    let name = sequence_name(&o.inputs);
+    let defaults = GltfOptions::default();
+    if o.gltf.name == defaults.name {
+        o.gltf.name = name.clone();
+        if o.gltf.clip_name.is_none() && !ctx.subcommand.is_empty() && ctx.subcommand != "convert" {
+            o.gltf.clip_name = Some(format!("{name}-{}", ctx.subcommand));
+        }
+    }
+    if o.usd.name == io::UsdOptions::default().name {
+        o.usd.name = name;
+    }
+    if let Some(n) = ctx.flags.max_targets {
+        o.gltf.max_targets = n;
+    }
+    if ctx.flags.no_normals {
+        o.gltf.normals = false;
+    }
+    let mut extras = match o.gltf.extras.take() {
+        Some(serde_json::Value::Object(m)) => m,
+        Some(other) => {
+            let mut m = serde_json::Map::new();
+            m.insert("data".into(), other);
+            m
+        }
+        None => serde_json::Map::new(),
+    };
+    if !ctx.command.is_empty() {
+        extras.insert("command".into(), json!(ctx.command));
+        extras.insert("subcommand".into(), json!(ctx.subcommand));
+    }
+    extras.insert(
+        "sources".into(),
+        json!(o
+            .inputs
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()),
+    );
+    extras.insert("fps".into(), json!(o.fps));
+    extras.insert("frames".into(), json!(frames));
+    let extras = json!({ "morphkit": extras });
+    o.gltf.extras = Some(extras.clone());
+    if o.usd.custom_data.is_none() {
+        o.usd.custom_data = Some(extras);
+    }
+    o
+}
 
 /// What an output holds, which decides the extensions it accepts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
-    /// One mesh: `.obj`, `.obj.gz`, `.ply`, `.off`, `.gltf` or `.glb`.
+    /// One mesh: `.obj`, `.obj.gz`, `.ply`, `.off`, `.gltf`, `.glb` or `.usda`.
     Mesh,
     /// An animation: a frame directory (an existing directory or a path without extension),
-    /// `.glb`, `.gltf` or `.pc2`.
+    /// `.glb`, `.gltf`, `.pc2` or `.usda`.
     Animation,
     /// Either, as the extension says (a single-frame blend).
     MeshOrAnimation,
@@ -35,8 +178,8 @@ pub enum Kind {
     Json,
 }
 
-const MESH_EXTS: &str = ".obj, .obj.gz, .ply, .off, .gltf or .glb";
-const ANIM_EXTS: &str = "a directory (a path without extension), .glb, .gltf or .pc2";
+const MESH_EXTS: &str = ".obj, .obj.gz, .ply, .off, .gltf, .glb or .usda";
+const ANIM_EXTS: &str = "a directory (a path without extension), .glb, .gltf, .pc2 or .usda";
 
 /// One planned output.
 #[derive(Clone, Debug)]
@@ -316,15 +459,69 @@ impl Outputs {
             .write(path, false, |tmp| io::write_ply_colored(tmp, mesh, colors))?)
     }
 
-    /// Stages a glTF rig.
+    /// Stages a glTF rig (target names kept) with the run's flags and extras, named `morphkit`;
+    /// see [`Outputs::gltf_from`] to name it after the inputs.
+    // Kept with its signature for the commands written against it (issue 9's `rig`).
+    #[allow(dead_code)]
     pub fn gltf(&mut self, path: &Path, rig: &GltfMorphs) -> anyhow::Result<()> {
-        Ok(self
-            .staging
-            .write(path, false, |tmp| io::write_gltf_morphs(tmp, rig))?)
+        self.gltf_from(path, rig, &[])
     }
 
-    /// Stages an animation (a frame directory, `.glb`/`.gltf` or `.pc2`), calling
-    /// `on_frame(i)` after each OBJ frame.
+    /// Stages a glTF rig (target names kept), with the run's names (after `inputs`), flags and
+    /// extras ([`frames_options`]); warns on stderr about what viewers may not play.
+    pub fn gltf_from(
+        &mut self,
+        path: &Path,
+        rig: &GltfMorphs,
+        inputs: &[PathBuf],
+    ) -> anyhow::Result<()> {
+        let opts = frames_options(
+            &FramesOptions {
+                inputs: inputs.to_vec(),
+                ..FramesOptions::default()
+            },
+            rig.weight_keys.len(),
+        );
+        self.gltf_with(path, rig, &opts.gltf)
+    }
+
+    fn gltf_with(
+        &mut self,
+        path: &Path,
+        rig: &GltfMorphs,
+        opts: &GltfOptions,
+    ) -> anyhow::Result<()> {
+        let mut summary = io::GltfSummary::default();
+        self.staging.write(path, false, |tmp| {
+            summary = io::write_gltf_with(tmp, rig, opts)?;
+            Ok(())
+        })?;
+        report_gltf(path, &summary, opts);
+        Ok(())
+    }
+
+    /// Stages a rig as `UsdSkel` blend shapes named after its targets, with the run's names and
+    /// custom layer data ([`frames_options`]).
+    pub fn usd_blendshapes(
+        &mut self,
+        path: &Path,
+        rig: &GltfMorphs,
+        inputs: &[PathBuf],
+    ) -> anyhow::Result<()> {
+        let opts = frames_options(
+            &FramesOptions {
+                inputs: inputs.to_vec(),
+                ..FramesOptions::default()
+            },
+            0,
+        );
+        Ok(self.staging.write(path, false, |tmp| {
+            io::write_usd_blendshapes(tmp, &rig.base, &rig.targets, &rig.target_names, &opts.usd)
+        })?)
+    }
+
+    /// Stages an animation (a frame directory, `.glb`/`.gltf`, `.pc2` or `.usda`), calling
+    /// `on_frame(i)` after each OBJ frame; names, flags and extras as [`frames_options`].
     pub fn frames(
         &mut self,
         path: &Path,
@@ -332,9 +529,13 @@ impl Outputs {
         opts: &FramesOptions,
         on_frame: impl FnMut(usize),
     ) -> anyhow::Result<()> {
+        let opts = frames_options(opts, frames.len());
         let dir = is_frame_dir(path);
+        if !dir && matches!(Format::from_path(path), Some(Format::Glb | Format::Gltf)) {
+            return self.gltf_with(path, &io::frames_to_gltf(frames, opts.fps), &opts.gltf);
+        }
         Ok(self.staging.write(path, dir, |tmp| {
-            io::write_frames_with(tmp, frames, opts, on_frame)
+            io::write_frames_with(tmp, frames, &opts, on_frame)
         })?)
     }
 
@@ -354,6 +555,25 @@ impl Outputs {
     /// Moves every staged output into place.
     pub fn commit(self) -> anyhow::Result<()> {
         Ok(self.staging.commit()?)
+    }
+}
+
+/// Tells on stderr when a glTF animation was split or will not play everywhere.
+pub fn report_gltf(path: &Path, summary: &io::GltfSummary, opts: &GltfOptions) {
+    for w in &summary.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    if summary.meshes > 1 {
+        eprintln!(
+            "warning: {}: {} morph targets are more than the {} one mesh may hold in WebGL2 \
+             viewers (--max-targets); written as {} meshes of at most {} targets, shown in turn by \
+             node scale",
+            path.display(),
+            summary.targets,
+            opts.max_targets,
+            summary.meshes,
+            opts.max_targets
+        );
     }
 }
 

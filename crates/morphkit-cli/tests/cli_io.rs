@@ -125,7 +125,19 @@ fn convert_sequences_to_animations_and_back() {
     ok(&["convert", s(&d.join("a.glb")), s(&d.join("copy.gltf"))]);
     let doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("copy.gltf")).unwrap()).unwrap();
-    assert_eq!(doc["meshes"][0]["extras"]["targetNames"][4], "f04.obj");
+    // Frame 0 (f00.obj) is the base, not a target; targets are named by file stem (issue 15).
+    assert_eq!(doc["meshes"][0]["extras"]["targetNames"][3], "f04");
+    assert_eq!(
+        doc["meshes"][0]["extras"]["targetNames"]
+            .as_array()
+            .unwrap()
+            .len(),
+        4
+    );
+    assert_eq!(
+        doc["nodes"][0]["name"], "a",
+        "named after the input, not morphkit"
+    );
     assert_eq!(
         doc["animations"][0]["channels"][0]["target"]["path"],
         "weights"

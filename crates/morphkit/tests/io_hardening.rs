@@ -265,7 +265,12 @@ fn an_unknown_animation_path_is_not_a_panic() {
         quad(),
         vec![
             ("a".into(), quad().positions),
-            ("b".into(), quad().positions),
+            // A frame that moves: a frame equal to the first is no morph target, and a
+            // sequence without targets has no weights channel.
+            (
+                "b".into(),
+                quad().positions.iter().map(|p| [p[0], p[1], 1.0]).collect(),
+            ),
         ],
     )
     .unwrap();

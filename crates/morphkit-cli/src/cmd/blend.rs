@@ -33,8 +33,10 @@ Examples:
   morphkit blend --base rest.obj --target bend.obj --frames 36 --linear --out linear.glb
   morphkit blend --scene examples/bend-around-cylinder/scene.toml --out wrap.glb --report wrap.json
 
-OUT: a directory (no extension) gets frame_0000.obj, …; .glb/.gltf gets an animation; .pc2 a
-point cache; .obj/.ply/.off a single mesh (one frame only). --fixed FILE.json holds
+OUT: a directory (no extension) gets frame_0000.obj, …; .glb/.gltf gets an animation (frame k
+at k/fps seconds; more than --max-targets frames are split into meshes shown in turn); .pc2 a
+point cache; .usda a USD Mesh with time-sampled points; .obj/.ply/.off a single mesh (one frame
+only). --fixed FILE.json holds
 {\"fixed\": [vertex ids]} (0-based) or a bare array. Without fixed vertices, each connected
 component keeps only its rigid motion free and is aligned to the linear blend.
 
@@ -108,10 +110,11 @@ pub struct BlendArgs {
     /// depend on it.
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Frames per second of a glTF animation output.
+    /// Frames per second of a .glb/.gltf or .usda animation output: N frames play as an
+    /// (N − 1)/fps second clip (9 frames at the default 24 fps last 0.33 s).
     #[arg(long, default_value_t = 24.0)]
     pub fps: f64,
-    /// Output: directory of OBJ frames, .glb/.gltf, .pc2, or a single .obj/.ply/.off.
+    /// Output: directory of OBJ frames, .glb/.gltf, .pc2, .usda, or a single .obj/.ply/.off.
     #[arg(long)]
     pub out: PathBuf,
     /// Write per-frame solver statistics, timings and quality metrics as JSON.
@@ -380,10 +383,13 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     if single_mesh {
         outputs.mesh(&a.out, &out_set.mesh(0))?;
     } else {
-        let opts = FramesOptions {
+        let mut opts = FramesOptions {
             fps: a.fps,
             inputs: inputs.clone(),
+            ..FramesOptions::default()
         };
+        opts.gltf.extras =
+            Some(json!({ "weights": weights.iter().map(weights_json).collect::<Vec<_>>() }));
         outputs.frames(&a.out, &out_set, &opts, |_| {})?;
     }
     let write_seconds = t_write.elapsed().as_secs_f64();

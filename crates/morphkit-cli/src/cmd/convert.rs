@@ -1,5 +1,5 @@
-//! `morphkit convert`: between OBJ, PLY, OFF, glTF/GLB and PC2, single meshes or frame
-//! sequences.
+//! `morphkit convert`: between OBJ, PLY, OFF, glTF/GLB, PC2 and USD (`.usda`), single meshes
+//! or frame sequences.
 
 use crate::outputs::{Kind, Outputs, Plan};
 use crate::util::{check_fps, progress};
@@ -18,9 +18,16 @@ Examples:
   morphkit convert anim.pc2 --reference rest.obj frames/   # PC2 needs the mesh for its connectivity
   morphkit convert face-rig.glb face-copy.gltf             # a morph-target rig keeps its targets and names
   morphkit convert cat-run.glb --frame 12 pose12.obj       # one frame of an animation
+  morphkit convert 'cat-run/*.obj.gz' cat-run.usda         # a USD Mesh with time-sampled points
+  morphkit convert face-rig.glb face-rig.usda              # a rig (no animation): UsdSkel blend shapes
+  morphkit convert long/ --max-targets 100 long.glb        # at most 100 morph targets per mesh
 
 An output without extension (or an existing directory) receives numbered OBJ frames; an
-existing directory that already holds frame_*.obj files needs --force. A single-mesh output
+existing directory that already holds frame_*.obj files needs --force. Frame k of a .glb/.gltf
+or .usda animation is at k/fps seconds (default 24 fps), so N frames play as an (N − 1)/fps
+second clip: 9 frames last 0.33 s, and viewers loop it. A .glb/.gltf animation of more than
+--max-targets frames (default 200, what WebGL2 viewers such as three.js hold per mesh) is split
+into meshes shown in turn, with a warning. A single-mesh output
 (.obj, .ply, .off) of an animation needs --frame N. Outputs are written atomically and never
 overwrite an input.";
 
@@ -31,7 +38,8 @@ pub struct ConvertArgs {
     /// Inputs (files, quoted glob patterns, or one directory of OBJ frames), then the output.
     #[arg(required = true, value_name = "IN... OUT")]
     pub paths: Vec<String>,
-    /// Frames per second of a written glTF animation.
+    /// Frames per second of a written .glb/.gltf or .usda animation (N frames last (N − 1)/fps
+    /// seconds).
     #[arg(long, default_value_t = 24.0)]
     pub fps: f64,
     /// Reference mesh giving the connectivity of a PC2 input.
@@ -95,7 +103,7 @@ pub(crate) fn expand(args: &[String]) -> anyhow::Result<Inputs> {
 fn is_frames_output(out: &Path) -> bool {
     out.is_dir()
         || (!out.exists() && out.extension().is_none())
-        || Format::from_path(out) == Some(Format::Pc2)
+        || matches!(Format::from_path(out), Some(Format::Pc2 | Format::Usda))
 }
 
 fn read_sequence(files: &[PathBuf]) -> anyhow::Result<ShapeSet> {
@@ -158,7 +166,7 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
     let sequence = inputs.len() > 1 || single_dir;
     if sequence && !frames_out && !out_gltf && args.frame.is_none() {
         bail!(
-            "{}: a sequence converts to an animation: give a directory, .glb, .gltf or .pc2 output, or --frame N for one frame",
+            "{}: a sequence converts to an animation: give a directory, .glb, .gltf, .pc2 or .usda output, or --frame N for one frame",
             out.display()
         );
     }
@@ -179,7 +187,8 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         .check()?;
     let opts = FramesOptions {
         fps: args.fps,
-        inputs: protected,
+        inputs: protected.clone(),
+        ..FramesOptions::default()
     };
     if sequence {
         let frames = read_sequence(&inputs)?;
@@ -190,17 +199,34 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
     }
     let input = &inputs[0];
     let in_fmt = Format::from_path(input);
-    let in_anim = matches!(in_fmt, Some(Format::Pc2 | Format::Glb | Format::Gltf));
+    let in_gltf = matches!(in_fmt, Some(Format::Glb | Format::Gltf));
+    let in_anim = in_gltf || matches!(in_fmt, Some(Format::Pc2 | Format::Usda));
+    if in_gltf && out_fmt == Some(Format::Usda) {
+        let rig = io::read_gltf_morphs(input)?;
+        if rig.weight_keys.is_empty() && !rig.targets.is_empty() {
+            // A rig without an animation: UsdSkel blend shapes with the target names.
+            let mut outputs = outputs;
+            outputs.usd_blendshapes(&out, &rig, &protected)?;
+            outputs.commit()?;
+            eprintln!(
+                "wrote {}: {} vertices, {} blend shapes",
+                out.display(),
+                rig.base.num_vertices(),
+                rig.targets.len()
+            );
+            return Ok(());
+        }
+    }
     if frames_out {
         let frames = io::read_animation(input, args.reference.as_deref())?;
         return write_frames(outputs, &out, &frames, &opts);
     }
-    if in_anim && out_gltf && args.frame.is_none() && in_fmt != Some(Format::Pc2) {
+    if in_gltf && out_gltf && args.frame.is_none() {
         let rig = io::read_gltf_morphs(input)?;
         morphkit::mesh::validate(&rig.base)
             .map_err(|e| anyhow::anyhow!("{}: {e}", input.display()))?;
         let mut outputs = outputs;
-        outputs.gltf(&out, &rig)?;
+        outputs.gltf_from(&out, &rig, &protected)?;
         outputs.commit()?;
         eprintln!(
             "wrote {}: {} vertices, {} morph targets, {} animation keys",
@@ -222,7 +248,7 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
             None if frames.len() == 1 => 0,
             None => bail!(
                 "{}: holds {} frames ({} … {}), but {} holds one mesh; give --frame N (0 to {}) \
-                 for one of them, or a directory, .glb, .gltf or .pc2 output for all",
+                 for one of them, or a directory, .glb, .gltf, .pc2 or .usda output for all",
                 input.display(),
                 frames.len(),
                 frames.name(0),

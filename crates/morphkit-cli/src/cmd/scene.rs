@@ -80,16 +80,30 @@ pub fn run(scene_path: &Path, out: &Path, report: Option<&Path>) -> anyhow::Resu
                 .iter()
                 .map(|o| o.gltf_track(n, scene.fps))
                 .collect();
-            io::write_gltf_scene(out, &io::frames_to_gltf(&out_set, scene.fps), &tracks)?;
+            let opts = crate::outputs::frames_options(
+                &FramesOptions {
+                    fps: scene.fps,
+                    inputs: inputs.clone(),
+                    ..FramesOptions::default()
+                },
+                out_set.len(),
+            );
+            let rig = io::frames_to_gltf(&out_set, scene.fps);
+            let summary = io::write_gltf_scene_with(out, &rig, &tracks, &opts.gltf)?;
+            crate::outputs::report_gltf(out, &summary, &opts.gltf);
         }
         _ if single => io::write_mesh(out, &out_set.mesh(0))?,
         _ => io::write_frames(
             out,
             &out_set,
-            &FramesOptions {
-                fps: scene.fps,
-                inputs: inputs.clone(),
-            },
+            &crate::outputs::frames_options(
+                &FramesOptions {
+                    fps: scene.fps,
+                    inputs: inputs.clone(),
+                    ..FramesOptions::default()
+                },
+                out_set.len(),
+            ),
         )?,
     }
     let write_seconds = t_write.elapsed().as_secs_f64();

@@ -149,10 +149,14 @@ pub fn run(args: &SynthArgs) -> anyhow::Result<()> {
     io::write_frames(
         &args.out,
         &set,
-        &FramesOptions {
-            fps: built.fps,
-            inputs: built.inputs.clone(),
-        },
+        &crate::outputs::frames_options(
+            &FramesOptions {
+                fps: built.fps,
+                inputs: built.inputs.clone(),
+                ..FramesOptions::default()
+            },
+            set.len(),
+        ),
     )?;
     eprintln!("wrote {}", args.out.display());
     let weights: Vec<&[f64]> = (0..s.num_layers())

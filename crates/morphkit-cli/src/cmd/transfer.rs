@@ -274,6 +274,7 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
     let frame_opts = FramesOptions {
         fps: args.fps,
         inputs,
+        ..FramesOptions::default()
     };
     outputs.frames(&args.out, &set, &frame_opts, |_| {})?;
     if let Some(r) = &args.report {

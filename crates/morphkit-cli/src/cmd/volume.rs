@@ -172,10 +172,14 @@ pub fn run(
     if single {
         io::write_mesh(&a.out, &out_set.mesh(0))?;
     } else {
-        let fo = FramesOptions {
-            fps: a.fps,
-            inputs: inputs.clone(),
-        };
+        let fo = crate::outputs::frames_options(
+            &FramesOptions {
+                fps: a.fps,
+                inputs: inputs.clone(),
+                ..FramesOptions::default()
+            },
+            out_set.len(),
+        );
         io::write_frames(&a.out, &out_set, &fo)?;
     }
     if let Some(r) = &a.report {

@@ -21,6 +21,8 @@ pub enum Format {
     Glb,
     /// Point cache (Blender's Mesh Cache modifier, 3ds Max).
     Pc2,
+    /// USD text layer (`.usda`): a mesh with time-sampled points.
+    Usda,
 }
 
 impl Format {
@@ -36,6 +38,7 @@ impl Format {
             "gltf" => Format::Gltf,
             "glb" => Format::Glb,
             "pc2" => Format::Pc2,
+            "usda" => Format::Usda,
             _ => return None,
         })
     }
@@ -45,9 +48,12 @@ impl Format {
         matches!(self, Format::Obj { .. } | Format::Ply | Format::Off)
     }
 
-    /// True for formats that hold a whole animation (glTF, GLB, PC2).
+    /// True for formats that hold a whole animation (glTF, GLB, PC2, USDA).
     pub fn is_animation(self) -> bool {
-        matches!(self, Format::Gltf | Format::Glb | Format::Pc2)
+        matches!(
+            self,
+            Format::Gltf | Format::Glb | Format::Pc2 | Format::Usda
+        )
     }
 }
 
@@ -74,6 +80,7 @@ mod tests {
         assert_eq!(f("b.tar.gz"), None);
         assert_eq!(f("x.glb"), Some(Format::Glb));
         assert_eq!(f("x.pc2"), Some(Format::Pc2));
+        assert_eq!(f("x.USDA"), Some(Format::Usda));
         assert_eq!(f("frames"), None);
     }
 }

@@ -1,4 +1,4 @@
-//! Mesh and animation files: OBJ (also `.obj.gz`), PLY, OFF, glTF/GLB and PC2.
+//! Mesh and animation files: OBJ (also `.obj.gz`), PLY, OFF, glTF/GLB, PC2 and USD text.
 //!
 //! | format | read | write | notes |
 //! |---|---|---|---|
@@ -7,6 +7,7 @@
 //! | OFF | [`off`] | [`off`] | |
 //! | glTF / GLB | [`gltf`] | [`gltf`] | first mesh; morph targets and morph-weight animations |
 //! | PC2 | [`pc2`] | [`pc2`] | positions only; connectivity from a reference mesh |
+//! | USD (`.usda`) | [`usd`] (minimal) | [`usd`] | time-sampled `points`; `UsdSkel` blend shapes |
 //! | weights | [`weights`] | | per-frame blend weights, JSON or CSV |
 //!
 //! Every read is validated once, on entry, with [`crate::mesh::validate`]: what it calls an
@@ -28,6 +29,7 @@ pub mod ply;
 mod sequence;
 mod source;
 mod staging;
+pub mod usd;
 pub mod weights;
 
 pub use atomic::{canonical_path, check_not_input, write_atomic};
@@ -35,25 +37,31 @@ pub use colors::{diverging, scalar_colors, viridis, Colors, NAN_GREY};
 pub use error::IoError;
 pub use format::Format;
 pub use gltf::{
-    parse_gltf_morphs, read_gltf_morphs, write_gltf_morphs, write_gltf_scene, GltfMorphs,
-    GltfRigidMesh,
+    parse_gltf_morphs, read_gltf_morphs, write_gltf_morphs, write_gltf_scene,
+    write_gltf_scene_with, write_gltf_with, GltfMorphs, GltfOptions, GltfRigidMesh, GltfSummary,
+    SAFE_MORPH_TARGETS,
 };
 pub use ply::{write_ply_colored, PlyEncoding};
 pub use sequence::{
     frames_to_gltf, gltf_to_frames, obj_files, read_animation, read_shape_set, read_shape_set_with,
-    write_frames, write_frames_with, FramesOptions,
+    shape_name, write_frames, write_frames_with, FramesOptions,
 };
 pub use source::{strip_bom, strip_bom_str};
 pub use staging::{frame_files, is_frame_file_name, Staging};
+pub use usd::{
+    read_usd_animation, write_usd_animation, write_usd_blendshapes, UpAxis, UsdAnimation,
+    UsdOptions,
+};
 pub use weights::{parse_weights, read_weights, WeightRow};
 
 use crate::mesh::{validate, TriMesh, ValidationReport};
 use std::path::Path;
 
-const MESH_FORMATS: &str = ".obj, .obj.gz, .ply, .off, .gltf or .glb";
+const MESH_FORMATS: &str = ".obj, .obj.gz, .ply, .off, .gltf, .glb or .usda";
 
 /// Reads one mesh, choosing the format by extension (`.obj`, `.obj.gz`, `.ply`, `.off`,
-/// `.gltf`, `.glb`; for glTF the first mesh's base positions), and validates it. Validation
+/// `.gltf`, `.glb`, `.usda`; for glTF the first mesh's base positions, for USD the first
+/// sample), and validates it. Validation
 /// warnings are dropped; see [`read_mesh_with_report`].
 pub fn read_mesh(path: &Path) -> Result<TriMesh, IoError> {
     read_mesh_with_report(path).map(|(m, _)| m)
@@ -72,6 +80,7 @@ pub fn read_mesh_with_report(path: &Path) -> Result<(TriMesh, ValidationReport),
         Format::Ply => ply::parse_ply(path, &source::read_file(path)?)?,
         Format::Off => off::parse_off(path, &source::read_file(path)?)?,
         Format::Gltf | Format::Glb => read_gltf_morphs(path)?.base,
+        Format::Usda => read_usd_animation(path)?.mesh,
         Format::Pc2 => {
             return Err(IoError::NeedsReference {
                 path: path.to_path_buf(),
@@ -87,7 +96,7 @@ pub fn read_mesh_with_report(path: &Path) -> Result<(TriMesh, ValidationReport),
 
 /// Writes one mesh atomically, choosing the format by extension: `.obj` / `.obj.gz` and `.off`
 /// (original polygons when the mesh has them), `.ply` (binary little endian), `.glb` / `.gltf`
-/// (triangles, no morph targets).
+/// (triangles, no morph targets), `.usda` (a static `Mesh`).
 pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<(), IoError> {
     match format::mesh_format(path, MESH_FORMATS)? {
         Format::Obj { gzip } => obj::write_obj(path, mesh, gzip),
@@ -99,6 +108,13 @@ pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<(), IoError> {
                 base: mesh.clone(),
                 ..GltfMorphs::default()
             },
+        ),
+        Format::Usda => write_usd_animation(
+            path,
+            mesh,
+            std::slice::from_ref(&mesh.positions),
+            24.0,
+            &UsdOptions::default(),
         ),
         Format::Pc2 => Err(IoError::UnknownFormat {
             path: path.to_path_buf(),

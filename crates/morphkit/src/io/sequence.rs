@@ -1,11 +1,12 @@
 //! Shape sets and animations made of several meshes: reading frame sequences and rigs, writing
-//! numbered OBJ frames, glTF morph animations and PC2 caches.
+//! numbered OBJ frames, glTF morph animations, PC2 caches and USD layers.
 
 use super::atomic::temp_sibling;
 use super::format::Format;
-use super::gltf::{read_gltf_morphs, write_gltf_morphs, GltfMorphs};
+use super::gltf::{read_gltf_morphs, write_gltf_with, GltfMorphs, GltfOptions};
 use super::pc2::{parse_pc2, write_pc2, PointCache};
 use super::staging::commit_dir;
+use super::usd::{read_usd_animation, write_usd_animation, UsdOptions};
 use super::{check_not_input, obj, read_mesh, source::read_file, IoError};
 use crate::mesh::{ShapeSet, ShapeSetError};
 use std::path::{Path, PathBuf};
@@ -18,6 +19,12 @@ pub struct FramesOptions {
     pub fps: f64,
     /// Input files; the output must not be one of them (nor a directory holding one).
     pub inputs: Vec<PathBuf>,
+    /// How a `.glb` / `.gltf` output is written (names, normals, material, target limit,
+    /// extras). Default [`GltfOptions::default`].
+    pub gltf: GltfOptions,
+    /// How a `.usda` output is written (prim name, up axis, units, custom data). Default
+    /// [`UsdOptions::default`].
+    pub usd: UsdOptions,
 }
 
 impl Default for FramesOptions {
@@ -25,8 +32,24 @@ impl Default for FramesOptions {
         Self {
             fps: 24.0,
             inputs: Vec::new(),
+            gltf: GltfOptions::default(),
+            usd: UsdOptions::default(),
         }
     }
+}
+
+/// A shape name without a mesh file extension (`.obj`, `.obj.gz`, `.ply`, `.off`, `.glb`,
+/// `.gltf`, `.usda`, `.pc2`): `f00000.obj` → `f00000`. Other names are kept.
+pub fn shape_name(name: &str) -> &str {
+    let lower = name.to_ascii_lowercase();
+    for ext in [
+        ".obj.gz", ".obj", ".ply", ".off", ".glb", ".gltf", ".usda", ".pc2",
+    ] {
+        if lower.ends_with(ext) && name.len() > ext.len() {
+            return &name[..name.len() - ext.len()];
+        }
+    }
+    name
 }
 
 fn file_name(p: &Path) -> String {
@@ -132,27 +155,50 @@ pub fn gltf_to_frames(path: &Path, m: &GltfMorphs) -> Result<ShapeSet, IoError> 
     })
 }
 
-/// The glTF rig that plays `frames`: base = shape 0's mesh, one morph target per frame named
-/// after it, and one-hot weight keys at `i / fps` seconds.
+/// The glTF rig that plays `frames`: the base is frame 0 itself (its positions over shape 0's
+/// connectivity), every later frame that differs from it is one morph target named after the
+/// frame (without a mesh file extension, see [`shape_name`]), and key `i` at `i / fps` seconds
+/// has one nonzero weight, 1 on frame `i`'s target (none for frame 0 and frames equal to it),
+/// so playing the keys with `LINEAR` interpolation interpolates the frames' positions.
 pub fn frames_to_gltf(frames: &ShapeSet, fps: f64) -> GltfMorphs {
     let n = frames.len();
-    GltfMorphs {
-        base: frames.base().clone(),
-        target_names: frames.names().to_vec(),
-        targets: frames.all_positions().to_vec(),
-        weight_keys: (0..n)
+    let first = frames.positions(0);
+    let mut target_names = Vec::new();
+    let mut targets = Vec::new();
+    let mut target_of = vec![None; n];
+    for i in 1..n {
+        if frames.positions(i) != first {
+            target_of[i] = Some(targets.len());
+            target_names.push(shape_name(frames.name(i)).to_string());
+            targets.push(frames.positions(i).to_vec());
+        }
+    }
+    let nt = targets.len();
+    let weight_keys = if nt == 0 {
+        Vec::new()
+    } else {
+        (0..n)
             .map(|i| {
-                let mut w = vec![0.0; n];
-                w[i] = 1.0;
+                let mut w = vec![0.0; nt];
+                if let Some(t) = target_of[i] {
+                    w[t] = 1.0;
+                }
                 (i as f64 / fps, w)
             })
-            .collect(),
+            .collect()
+    };
+    GltfMorphs {
+        base: frames.base().with_positions(first.to_vec()),
+        target_names,
+        targets,
+        weight_keys,
     }
 }
 
 /// Reads an animation or a rig as a [`ShapeSet`]:
 /// - a directory: its `*.obj` / `*.obj.gz` files sorted by name (see [`read_shape_set`]);
 /// - `.glb` / `.gltf`: see [`gltf_to_frames`];
+/// - `.usda`: one shape per `points` time sample (`frame_NNNN`), see [`read_usd_animation`];
 /// - `.pc2`: one shape per sample (`frame_NNNN`) over `reference`'s connectivity, which is
 ///   required ([`IoError::NeedsReference`]) and must have as many vertices as the cache points;
 /// - a single OBJ/PLY/OFF mesh: a set of one shape.
@@ -162,6 +208,23 @@ pub fn read_animation(path: &Path, reference: Option<&Path>) -> Result<ShapeSet,
     }
     match Format::from_path(path) {
         Some(Format::Gltf | Format::Glb) => gltf_to_frames(path, &read_gltf_morphs(path)?),
+        Some(Format::Usda) => {
+            let a = read_usd_animation(path)?;
+            crate::mesh::validate(&a.mesh).map_err(|cause| IoError::InvalidMesh {
+                path: path.to_path_buf(),
+                cause,
+            })?;
+            let shapes = a
+                .samples
+                .into_iter()
+                .enumerate()
+                .map(|(i, (_, s))| (format!("frame_{i:04}"), s))
+                .collect();
+            ShapeSet::new(a.mesh, shapes).map_err(|source| IoError::ShapeSet {
+                path: path.to_path_buf(),
+                cause: source,
+            })
+        }
         Some(Format::Pc2) => {
             let reference = reference.ok_or_else(|| IoError::NeedsReference {
                 path: path.to_path_buf(),
@@ -215,8 +278,10 @@ pub fn write_frames(out: &Path, frames: &ShapeSet, opts: &FramesOptions) -> Resu
 ///   by an earlier, longer sequence are then removed. Other files in `out` are never touched.
 ///   A failure while writing removes only the temporary directory: no file that existed before
 ///   the call is changed or deleted;
-/// - `.glb` / `.gltf`: [`frames_to_gltf`] at `opts.fps`;
-/// - `.pc2`: one sample per shape, start frame 0, one frame per sample.
+/// - `.glb` / `.gltf`: [`frames_to_gltf`] at `opts.fps`, written with `opts.gltf`
+///   ([`write_gltf_with`]);
+/// - `.pc2`: one sample per shape, start frame 0, one frame per sample;
+/// - `.usda`: [`write_usd_animation`] at `opts.fps` with `opts.usd`.
 ///
 /// Fails before writing anything when `out` is an input ([`check_not_input`]) or `fps` is not
 /// positive.
@@ -238,8 +303,15 @@ pub fn write_frames_with(
     }
     match Format::from_path(out) {
         Some(Format::Glb | Format::Gltf) => {
-            write_gltf_morphs(out, &frames_to_gltf(frames, opts.fps))
+            write_gltf_with(out, &frames_to_gltf(frames, opts.fps), &opts.gltf).map(|_| ())
         }
+        Some(Format::Usda) => write_usd_animation(
+            out,
+            frames.base(),
+            frames.all_positions(),
+            opts.fps,
+            &opts.usd,
+        ),
         Some(Format::Pc2) => write_pc2(
             out,
             &PointCache {
@@ -250,7 +322,7 @@ pub fn write_frames_with(
         ),
         _ => Err(IoError::UnknownFormat {
             path: out.to_path_buf(),
-            expected: "a directory, .glb, .gltf or .pc2 for an animation",
+            expected: "a directory, .glb, .gltf, .pc2 or .usda for an animation",
         }),
     }
 }

@@ -6,27 +6,95 @@
 //! vertices of the primitives before), node transforms are ignored (positions are the mesh's
 //! own), the morph targets' `POSITION` displacements become absolute target positions, names
 //! come from `mesh.extras.targetNames`, and the first animation channel that drives the
-//! `weights` of a node using that mesh gives the weight keys.
+//! `weights` of a node using that mesh gives the weight keys. A long animation that
+//! [`write_gltf_with`] split into several meshes (their `extras.morphkitTargets`) is read back
+//! as one rig: every target once, the windows' keys merged in time order.
 //!
-//! Writing ([`write_gltf_morphs`]) produces one buffer (the GLB `BIN` chunk, or a base64 data
-//! URI in a `.gltf`, so the output is always one file), one mesh with one triangle primitive —
-//! `f32` `POSITION` with `min`/`max`, `u32` indices, one `f32` `POSITION` displacement accessor
-//! (with `min`/`max`) per morph target — `mesh.weights` all zero, `mesh.extras.targetNames`,
-//! one node and one scene, and, when there are weight keys, one animation with a `LINEAR`
-//! sampler on the node's `weights` path (what Blender and three.js play). Every accessor has its
-//! own buffer view, 4-byte aligned, with the proper `target` for vertex data and indices.
+//! Writing ([`write_gltf_with`], or [`write_gltf_morphs`] with the default [`GltfOptions`])
+//! produces one buffer (the GLB `BIN` chunk, or a base64 data URI in a `.gltf`, so the output
+//! is always one file) and this layout (glTF 2.0 §3.7 meshes, §3.11 animations):
+//!
+//! - **Geometry, shared.** One `f32` `POSITION` accessor (with `min`/`max`), one unit `NORMAL`
+//!   accessor (area-weighted vertex normals; [`GltfOptions::normals`]), `u32` indices, and per
+//!   morph target one `POSITION` displacement accessor (with `min`/`max`) and one `NORMAL`
+//!   delta accessor (target normal − base normal, §3.7.2.2). Every accessor has its own
+//!   4-byte-aligned buffer view with the proper `target`.
+//! - **Material.** One default PBR metallic-roughness material (§3.9.2: light grey, metallic 0,
+//!   roughness 0.6), `doubleSided` when the mesh is open (has boundary edges), so the inside of
+//!   an open surface is not culled.
+//! - **Weights animation, stored sparsely.** Keys are `LINEAR` on the node's `weights` path.
+//!   The output accessor (keys × targets floats) is a **sparse accessor without a buffer view**
+//!   (§3.6.2.3: it starts all zero and lists only the nonzero weights with `u32` indices), so a
+//!   frame sequence, where each key has one nonzero weight, costs 8 bytes per key instead of
+//!   4 × targets. Dense output is kept when it is smaller.
+//! - **Long animations are split** ([`GltfOptions::max_targets`], default
+//!   [`SAFE_MORPH_TARGETS`]). Viewers hold all morph targets of a mesh at once (three.js packs
+//!   them into one texture array and one uniform array, limited by the GPU: WebGL2 guarantees 256
+//!   layers and 256 vertex uniform vectors), so a mesh with thousands of targets silently stays
+//!   at its base. When an animation needs more targets than the limit, the keys are cut into
+//!   consecutive windows needing at most `max_targets` targets each (neighbouring windows share
+//!   their boundary key). Each window is one mesh and one node: the meshes share the base
+//!   accessors, and a target used by two windows shares its accessor, so nothing is stored twice.
+//!   Each node has its own `weights` channel over its window, and a `STEP` `scale` channel
+//!   (§3.11.2) shows it (scale 1) during its window and hides it (scale 0) otherwise; every node
+//!   but the first starts hidden. Such meshes carry `extras.morphkitTargets` (the original index
+//!   of each of their targets), from which [`read_gltf_morphs`] puts the rig back together.
+//! - **Names and extras.** Node, mesh, material and clip are named after
+//!   [`GltfOptions::name`] and [`GltfOptions::clip_name`]; `mesh.extras.targetNames` holds the
+//!   target names; [`GltfOptions::extras`] becomes `scenes[0].extras` (the command, the sources,
+//!   the blend weights per frame), where Blender shows it as custom properties.
 
 mod buffers;
+mod normals;
 mod precheck;
 mod read;
+mod read_chunks;
+mod split;
 mod write;
 mod write_scene;
 
 pub use read::{parse_gltf_morphs, read_gltf_morphs};
-pub use write::write_gltf_morphs;
-pub use write_scene::{write_gltf_scene, GltfRigidMesh};
+pub use write::{write_gltf_morphs, write_gltf_with, GltfSummary};
+pub use write_scene::{write_gltf_scene, write_gltf_scene_with, GltfRigidMesh};
 
 use crate::mesh::{Point, TriMesh};
+
+/// The most morph targets one mesh gets by default ([`GltfOptions::max_targets`]): WebGL2
+/// guarantees 256 texture-array layers and 256 vertex uniform vectors, and three.js needs one
+/// layer and one uniform per target plus its other uniforms.
+pub const SAFE_MORPH_TARGETS: usize = 200;
+
+/// How [`write_gltf_with`] writes a rig (see the [module documentation](self) for the layout).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GltfOptions {
+    /// Name of the node, mesh and material. Default `morphkit`.
+    pub name: String,
+    /// Name of the animation; `None` (default) uses [`GltfOptions::name`].
+    pub clip_name: Option<String>,
+    /// Write vertex normals for the base and normal deltas for the targets, so viewers shade
+    /// smoothly. Default `true`; `false` saves 12 bytes per vertex and target.
+    pub normals: bool,
+    /// Write the default PBR material (double-sided when the mesh is open). Default `true`.
+    pub material: bool,
+    /// The most morph targets one mesh gets; an animation needing more is split into several
+    /// meshes switched by node scale. `0` never splits. Default [`SAFE_MORPH_TARGETS`].
+    pub max_targets: usize,
+    /// JSON written as `scenes[0].extras`. Default `None`.
+    pub extras: Option<serde_json::Value>,
+}
+
+impl Default for GltfOptions {
+    fn default() -> Self {
+        Self {
+            name: "morphkit".into(),
+            clip_name: None,
+            normals: true,
+            material: true,
+            max_targets: SAFE_MORPH_TARGETS,
+            extras: None,
+        }
+    }
+}
 
 /// A mesh with morph targets and an optional morph-weight animation, as stored in glTF.
 #[derive(Clone, Debug, PartialEq, Default)]

@@ -295,6 +295,16 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
             *q = [b[0] + q[0], b[1] + q[1], b[2] + q[2]];
         }
     }
+    if let Some((target_names, targets, weight_keys)) =
+        super::read_chunks::read_split(path, doc, &buffers, &base.positions)?
+    {
+        return Ok(GltfMorphs {
+            base,
+            target_names,
+            targets,
+            weight_keys,
+        });
+    }
     let target_names = target_names(mesh.extras(), targets.len());
     let weight_keys = weight_keys(path, doc, mesh.index(), targets.len(), &get)?;
     Ok(GltfMorphs {
@@ -306,7 +316,7 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
 }
 
 /// `extras.targetNames` when it is an array of as many strings as targets, else `target_k`.
-fn target_names(extras: &::gltf::json::Extras, n: usize) -> Vec<String> {
+pub(super) fn target_names(extras: &::gltf::json::Extras, n: usize) -> Vec<String> {
     let names = extras
         .as_ref()
         .and_then(|raw| serde_json::from_str::<serde_json::Value>(raw.get()).ok())
@@ -322,7 +332,7 @@ fn target_names(extras: &::gltf::json::Extras, n: usize) -> Vec<String> {
     }
 }
 
-fn weight_keys<'a, 's>(
+pub(super) fn weight_keys<'a, 's>(
     path: &Path,
     doc: &'a ::gltf::Document,
     mesh: usize,

@@ -1,6 +1,8 @@
 //! Writing [`GltfMorphs`] as glTF (JSON with an embedded data URI) or GLB.
 
-use super::GltfMorphs;
+use super::normals::{to_f32_unit, vertex_normals};
+use super::split::{windows, Window};
+use super::{GltfMorphs, GltfOptions};
 use crate::io::{atomic::write_atomic, IoError};
 use crate::mesh::Point;
 use serde_json::{json, Value};
@@ -50,6 +52,16 @@ impl Builder {
         self.accessors.push(json!({
             "bufferView": view, "componentType": FLOAT, "count": p.len(), "type": "VEC3",
             "min": lo, "max": hi
+        }));
+        self.accessors.len() - 1
+    }
+
+    /// A VEC3 f32 accessor without min/max (normals, normal deltas); returns its index.
+    pub(super) fn vec3_plain(&mut self, p: &[[f32; 3]]) -> usize {
+        let bytes: Vec<u8> = p.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+        let view = self.view(&bytes, Some(ARRAY_BUFFER));
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": FLOAT, "count": p.len(), "type": "VEC3"
         }));
         self.accessors.len() - 1
     }
@@ -158,16 +170,76 @@ fn check(path: &Path, m: &GltfMorphs) -> Result<(), IoError> {
     Ok(())
 }
 
-/// Builds the JSON document and the binary buffer.
-fn build(path: &Path, m: &GltfMorphs) -> Result<(Value, Vec<u8>), IoError> {
-    let (doc, b) = build_with(path, m)?;
-    Ok(finish(doc, b))
+/// What [`write_gltf_with`] wrote.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GltfSummary {
+    /// Morph-target meshes written: 1, or more when a long animation was split.
+    pub meshes: usize,
+    /// Morph targets in the rig.
+    pub targets: usize,
+    /// Things a viewer may not play, in words (a mesh above [`GltfOptions::max_targets`] that
+    /// could not be split).
+    pub warnings: Vec<String>,
+}
+
+/// Weight rows of `keys` restricted to `targets`, as `f32`, for keys `k0..=k1`.
+fn local_rows(m: &GltfMorphs, targets: &[usize], k0: usize, k1: usize) -> Vec<f32> {
+    m.weight_keys[k0..=k1]
+        .iter()
+        .flat_map(|(_, w)| targets.iter().map(move |&t| w[t] as f32))
+        .collect()
+}
+
+impl Builder {
+    /// A SCALAR f32 accessor of `values`, sparse (§3.6.2.3: no buffer view, only the nonzero
+    /// values and their `u32` indices) when that is smaller than dense.
+    pub(super) fn weights(&mut self, values: &[f32]) -> usize {
+        let nz: Vec<usize> = (0..values.len()).filter(|&i| values[i] != 0.0).collect();
+        if nz.is_empty() || 2 * nz.len() >= values.len() {
+            let bytes = values.iter().flat_map(|x| x.to_le_bytes()).collect();
+            return self.scalars(bytes, values.len(), FLOAT, None, None);
+        }
+        let ib: Vec<u8> = nz.iter().flat_map(|&i| (i as u32).to_le_bytes()).collect();
+        let vb: Vec<u8> = nz.iter().flat_map(|&i| values[i].to_le_bytes()).collect();
+        let iv = self.view(&ib, None);
+        let vv = self.view(&vb, None);
+        self.accessors.push(json!({
+            "componentType": FLOAT, "count": values.len(), "type": "SCALAR",
+            "sparse": {
+                "count": nz.len(),
+                "indices": {"bufferView": iv, "componentType": UNSIGNED_INT},
+                "values": {"bufferView": vv},
+            }
+        }));
+        self.accessors.len() - 1
+    }
+
+    /// An f32 SCALAR key-time accessor with min/max.
+    fn times(&mut self, t: &[f32]) -> usize {
+        let tb: Vec<u8> = t.iter().flat_map(|x| x.to_le_bytes()).collect();
+        self.scalars(tb, t.len(), FLOAT, None, Some((t[0], t[t.len() - 1])))
+    }
+}
+
+/// True when the mesh has an edge used by one triangle only.
+fn is_open(m: &crate::mesh::TriMesh) -> bool {
+    !crate::mesh::Topology::new(m.num_vertices(), &m.triangles)
+        .boundary_edges()
+        .is_empty()
 }
 
 /// The document and the builder before the buffer list is written, so that more nodes can be
 /// added ([`super::write_scene`]).
-pub(super) fn build_with(path: &Path, m: &GltfMorphs) -> Result<(Value, Builder), IoError> {
+pub(super) fn build_with(
+    path: &Path,
+    m: &GltfMorphs,
+    opts: &GltfOptions,
+) -> Result<(Value, Builder, GltfSummary), IoError> {
     check(path, m)?;
+    let mut summary = GltfSummary {
+        targets: m.targets.len(),
+        ..GltfSummary::default()
+    };
     let mut b = Builder::default();
     let base = to_f32(path, "base", &m.base.positions, None)?;
     let pos = b.vec3(&base);
@@ -185,6 +257,11 @@ pub(super) fn build_with(path: &Path, m: &GltfMorphs) -> Result<(Value, Builder)
         Some(ELEMENT_ARRAY_BUFFER),
         None,
     );
+    // Accessor order: POSITION 0, indices 1, NORMAL 2, then the targets.
+    let base_normals = opts
+        .normals
+        .then(|| vertex_normals(&m.base.positions, &m.base.triangles));
+    let normal = base_normals.as_ref().map(|n| b.vec3_plain(&to_f32_unit(n)));
     let mut targets = Vec::with_capacity(m.targets.len());
     for (t, tp) in m.targets.iter().enumerate() {
         let d = to_f32(
@@ -193,46 +270,148 @@ pub(super) fn build_with(path: &Path, m: &GltfMorphs) -> Result<(Value, Builder)
             tp,
             Some(&m.base.positions),
         )?;
-        targets.push(json!({"POSITION": b.vec3(&d)}));
+        let mut target = json!({"POSITION": b.vec3(&d)});
+        if let Some(n0) = &base_normals {
+            let n = vertex_normals(tp, &m.base.triangles);
+            let dn: Vec<[f32; 3]> = to_f32_unit(&n)
+                .iter()
+                .zip(to_f32_unit(n0))
+                .map(|(a, c)| [a[0] - c[0], a[1] - c[1], a[2] - c[2]])
+                .collect();
+            target["NORMAL"] = json!(b.vec3_plain(&dn));
+        }
+        targets.push(target);
     }
-    let mut primitive = json!({"attributes": {"POSITION": pos}, "indices": indices, "mode": 4});
-    let mut mesh = json!({"name": "morphkit", "primitives": []});
-    if !targets.is_empty() {
-        primitive["targets"] = Value::Array(targets);
-        mesh["weights"] = json!(vec![0.0; m.targets.len()]);
-        mesh["extras"] = json!({"targetNames": m.target_names});
+    let rows: Vec<Vec<f64>> = m.weight_keys.iter().map(|(_, w)| w.clone()).collect();
+    let windows = match windows(&rows, m.targets.len(), opts.max_targets) {
+        Some(w) => w,
+        None => {
+            summary.warnings.push(format!(
+                "{} morph targets in one mesh, above the limit of {} that viewers play \
+                 (three.js on WebGL2 leaves such a mesh at its base); the weights cannot be \
+                 split into meshes of at most {} targets",
+                m.targets.len(),
+                opts.max_targets,
+                opts.max_targets
+            ));
+            vec![Window {
+                targets: (0..m.targets.len()).collect(),
+                keys: (0, m.weight_keys.len().saturating_sub(1)),
+            }]
+        }
+    };
+    if opts.max_targets == 0 && m.targets.len() > super::SAFE_MORPH_TARGETS {
+        summary.warnings.push(format!(
+            "{} morph targets in one mesh, above the {} that WebGL2 viewers such as three.js \
+             play (the mesh stays at its base there); splitting is off (max_targets 0)",
+            m.targets.len(),
+            super::SAFE_MORPH_TARGETS
+        ));
     }
-    mesh["primitives"] = json!([primitive]);
+    let split = windows.len() > 1;
+    summary.meshes = windows.len();
+    let mut attributes = json!({"POSITION": pos});
+    if let Some(n) = normal {
+        attributes["NORMAL"] = json!(n);
+    }
     let mut doc = json!({
         "asset": {"version": "2.0", "generator": concat!("morphkit ", env!("CARGO_PKG_VERSION"))},
         "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0, "name": "morphkit"}],
-        "meshes": [mesh],
+        "scenes": [{"name": opts.name, "nodes": []}],
+        "nodes": [],
+        "meshes": [],
     });
-    if !m.weight_keys.is_empty() {
-        let times: Vec<f32> = m.weight_keys.iter().map(|(t, _)| *t as f32).collect();
-        let tb: Vec<u8> = times.iter().flat_map(|t| t.to_le_bytes()).collect();
-        let input = b.scalars(
-            tb,
-            times.len(),
-            FLOAT,
-            None,
-            Some((times[0], times[times.len() - 1])),
-        );
-        let wb: Vec<u8> = m
-            .weight_keys
-            .iter()
-            .flat_map(|(_, w)| w.iter().flat_map(|&x| (x as f32).to_le_bytes()))
-            .collect();
-        let output = b.scalars(wb, times.len() * m.targets.len(), FLOAT, None, None);
-        doc["animations"] = json!([{
-            "name": "morphkit",
-            "samplers": [{"input": input, "output": output, "interpolation": "LINEAR"}],
-            "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}],
+    if opts.material {
+        doc["materials"] = json!([{
+            "name": opts.name,
+            "pbrMetallicRoughness": {
+                "baseColorFactor": [0.8, 0.8, 0.8, 1.0],
+                "metallicFactor": 0.0,
+                "roughnessFactor": 0.6
+            },
+            "doubleSided": is_open(&m.base),
         }]);
     }
-    Ok((doc, b))
+    if let Some(e) = &opts.extras {
+        doc["scenes"][0]["extras"] = e.clone();
+    }
+    let mut samplers = Vec::new();
+    let mut channels = Vec::new();
+    let last = m.weight_keys.len().saturating_sub(1);
+    let time = |k: usize| m.weight_keys[k].0 as f32;
+    for (c, win) in windows.iter().enumerate() {
+        let name = if split {
+            format!("{}.{c}", opts.name)
+        } else {
+            opts.name.clone()
+        };
+        let mut primitive = json!({"attributes": attributes, "indices": indices, "mode": 4});
+        if opts.material {
+            primitive["material"] = json!(0);
+        }
+        let mut mesh = json!({"name": name});
+        if !win.targets.is_empty() {
+            primitive["targets"] =
+                Value::Array(win.targets.iter().map(|&t| targets[t].clone()).collect());
+            mesh["weights"] = json!(vec![0.0; win.targets.len()]);
+            let names: Vec<&String> = win.targets.iter().map(|&t| &m.target_names[t]).collect();
+            mesh["extras"] = json!({"targetNames": names});
+            if split {
+                mesh["extras"]["morphkitTargets"] = json!(win.targets);
+            }
+        }
+        mesh["primitives"] = json!([primitive]);
+        doc["meshes"].as_array_mut().expect("meshes").push(mesh);
+        let mut node = json!({"mesh": c, "name": name});
+        if split && c > 0 {
+            node["scale"] = json!([0.0, 0.0, 0.0]);
+        }
+        doc["nodes"].as_array_mut().expect("nodes").push(node);
+        doc["scenes"][0]["nodes"]
+            .as_array_mut()
+            .expect("scene")
+            .push(json!(c));
+        if m.weight_keys.is_empty() {
+            continue;
+        }
+        let (k0, k1) = win.keys;
+        let ts: Vec<f32> = (k0..=k1).map(time).collect();
+        let input = b.times(&ts);
+        let output = b.weights(&local_rows(m, &win.targets, k0, k1));
+        samplers.push(json!({"input": input, "output": output, "interpolation": "LINEAR"}));
+        channels
+            .push(json!({"sampler": samplers.len() - 1, "target": {"node": c, "path": "weights"}}));
+        if split {
+            // Visible from the window's first key until the next window's first key.
+            let mut keys: Vec<(f32, f32)> = Vec::new();
+            if k0 > 0 {
+                keys.push((time(0), 0.0));
+            }
+            keys.push((time(k0), 1.0));
+            if k1 < last {
+                keys.push((time(k1), 0.0));
+            }
+            let st: Vec<f32> = keys.iter().map(|k| k.0).collect();
+            let sv: Vec<f32> = keys.iter().flat_map(|k| [k.1; 3]).collect();
+            let input = b.times(&st);
+            let bytes: Vec<u8> = sv.iter().flat_map(|x| x.to_le_bytes()).collect();
+            let view = b.view(&bytes, None);
+            b.accessors.push(json!({"bufferView": view, "componentType": FLOAT, "count": keys.len(), "type": "VEC3"}));
+            let output = b.accessors.len() - 1;
+            samplers.push(json!({"input": input, "output": output, "interpolation": "STEP"}));
+            channels.push(
+                json!({"sampler": samplers.len() - 1, "target": {"node": c, "path": "scale"}}),
+            );
+        }
+    }
+    if !samplers.is_empty() {
+        doc["animations"] = json!([{
+            "name": opts.clip_name.as_ref().unwrap_or(&opts.name),
+            "samplers": samplers,
+            "channels": channels,
+        }]);
+    }
+    Ok((doc, b, summary))
 }
 
 /// Pads the buffer and writes the buffer views, accessors and buffer into the document.
@@ -253,8 +432,23 @@ pub(super) fn finish(mut doc: Value, mut b: Builder) -> (Value, Vec<u8>) {
 /// strictly increasing, coordinates that overflow `f32`, and the errors of
 /// [`crate::io::write_atomic`].
 pub fn write_gltf_morphs(path: &Path, m: &GltfMorphs) -> Result<(), IoError> {
-    let (doc, bin) = build(path, m)?;
-    write_document(path, doc, &bin)
+    write_gltf_with(path, m, &GltfOptions::default()).map(|_| ())
+}
+
+/// Writes `m` to `path` atomically with `opts` (see the [module documentation](super) for the
+/// layout): GLB for `.glb`, otherwise glTF JSON with the buffer as a base64 data URI. The
+/// summary says how many meshes were written and what a viewer may not play.
+///
+/// Errors: those of [`write_gltf_morphs`].
+pub fn write_gltf_with(
+    path: &Path,
+    m: &GltfMorphs,
+    opts: &GltfOptions,
+) -> Result<GltfSummary, IoError> {
+    let (doc, b, summary) = build_with(path, m, opts)?;
+    let (doc, bin) = finish(doc, b);
+    write_document(path, doc, &bin)?;
+    Ok(summary)
 }
 
 /// Writes a finished document and its buffer as GLB (`.glb`) or glTF with a data URI.

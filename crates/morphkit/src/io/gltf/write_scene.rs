@@ -1,14 +1,14 @@
 //! Writing a morph-target animation together with rigid meshes that move beside it (the
 //! obstacles of a scene), as glTF or GLB.
 //!
-//! The morph-target mesh is written exactly as by [`write_gltf_morphs`](super::write_gltf_morphs)
-//! (mesh 0, node 0); each rigid mesh adds one mesh and one node, with its first pose as the
+//! The morph-target mesh is written exactly as by [`write_gltf_with`](super::write_gltf_with)
+//! (meshes and nodes first); each rigid mesh adds one mesh and one node, with its first pose as the
 //! node's `translation` / `rotation`, and, when it has more than one key, `LINEAR`
 //! `translation` and `rotation` channels (glTF interpolates rotations by slerp) in the same
 //! animation as the morph weights, so everything plays together.
 
 use super::write::{build_with, finish, to_f32, write_document, Builder};
-use super::GltfMorphs;
+use super::{GltfMorphs, GltfOptions, GltfSummary};
 use crate::io::IoError;
 use crate::mesh::{Point, TriMesh};
 use serde_json::{json, Value};
@@ -130,10 +130,22 @@ pub fn write_gltf_scene(
     m: &GltfMorphs,
     rigid: &[GltfRigidMesh],
 ) -> Result<(), IoError> {
-    let (mut doc, mut b) = build_with(path, m)?;
+    write_gltf_scene_with(path, m, rigid, &GltfOptions::default()).map(|_| ())
+}
+
+/// Like [`write_gltf_scene`], writing the morph-target mesh with `opts`
+/// (see [`write_gltf_with`](super::write_gltf_with)).
+pub fn write_gltf_scene_with(
+    path: &Path,
+    m: &GltfMorphs,
+    rigid: &[GltfRigidMesh],
+    opts: &GltfOptions,
+) -> Result<GltfSummary, IoError> {
+    let (mut doc, mut b, summary) = build_with(path, m, opts)?;
     for r in rigid {
         add_rigid(path, &mut doc, &mut b, r)?;
     }
     let (doc, bin) = finish(doc, b);
-    write_document(path, doc, &bin)
+    write_document(path, doc, &bin)?;
+    Ok(summary)
 }

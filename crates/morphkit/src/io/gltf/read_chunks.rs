@@ -1,0 +1,117 @@
+//! Putting a split rig back together on reading (the long-animation layout of the
+//! [module documentation](super)): meshes whose `extras.morphkitTargets` give the rig index of
+//! each of their targets, each played by its own node's `weights` channel over a window of keys.
+
+use super::read::{target_names, weight_keys};
+use crate::io::IoError;
+use crate::mesh::Point;
+use std::path::Path;
+
+/// `extras.morphkitTargets` of a mesh, when present.
+fn rig_indices(extras: &::gltf::json::Extras) -> Option<Vec<usize>> {
+    let v: serde_json::Value = serde_json::from_str(extras.as_ref()?.get()).ok()?;
+    v.get("morphkitTargets")?
+        .as_array()?
+        .iter()
+        .map(|x| x.as_u64().map(|i| i as usize))
+        .collect()
+}
+
+/// The rig of a split file: names, absolute target positions and merged weight keys; `None`
+/// when mesh 0 is not part of a split rig. `base` are the base positions of mesh 0, which
+/// every part shares.
+#[allow(clippy::type_complexity)]
+pub(super) fn read_split(
+    path: &Path,
+    doc: &::gltf::Document,
+    buffers: &[Vec<u8>],
+    base: &[Point],
+) -> Result<Option<(Vec<String>, Vec<Vec<Point>>, Vec<(f64, Vec<f64>)>)>, IoError> {
+    let get = |b: ::gltf::Buffer| buffers.get(b.index()).map(|d| &d[..]);
+    let parts: Vec<(::gltf::Mesh, Vec<usize>)> = doc
+        .meshes()
+        .filter_map(|m| rig_indices(m.extras()).map(|r| (m, r)))
+        .collect();
+    if parts.first().is_none_or(|(m, _)| m.index() != 0) {
+        return Ok(None);
+    }
+    let n = parts
+        .iter()
+        .flat_map(|(_, r)| r.iter().copied())
+        .max()
+        .map_or(0, |i| i.saturating_add(1));
+    // Every rig index must be held by some part, so there are at most as many as listed (this
+    // also bounds the allocations below by the file's own size).
+    let listed: usize = parts.iter().map(|(_, r)| r.len()).sum();
+    if n > listed {
+        return Err(IoError::content(
+            path,
+            format!(
+                "split rig: extras.morphkitTargets names target {}, but the parts list only {listed} targets",
+                n - 1
+            ),
+        ));
+    }
+    let nv = base.len();
+    let mut names = vec![String::new(); n];
+    let mut targets: Vec<Option<Vec<Point>>> = vec![None; n];
+    let mut keys: Vec<(f64, Vec<f64>)> = Vec::new();
+    for (mesh, rig) in &parts {
+        let mi = mesh.index();
+        let at =
+            |m: String| IoError::content(path, format!("mesh {mi} (part of a split rig): {m}"));
+        let prim = mesh
+            .primitives()
+            .next()
+            .ok_or_else(|| at("has no primitive".into()))?;
+        let local: Vec<_> = prim.morph_targets().collect();
+        if local.len() != rig.len() {
+            return Err(at(format!(
+                "has {} morph targets but extras.morphkitTargets lists {}",
+                local.len(),
+                rig.len()
+            )));
+        }
+        let local_names = target_names(mesh.extras(), rig.len());
+        let reader = prim.reader(get);
+        for (j, (tp, _, _)) in reader.read_morph_targets().enumerate() {
+            let d: Vec<[f32; 3]> = tp.map(|it| it.collect()).unwrap_or_default();
+            if d.len() != nv || d.iter().flatten().any(|x| !x.is_finite()) {
+                return Err(at(format!(
+                    "morph target {j} has {} finite displacements, the base has {nv} vertices",
+                    d.len()
+                )));
+            }
+            let g = rig[j];
+            if targets[g].is_none() {
+                targets[g] = Some(
+                    d.iter()
+                        .zip(base)
+                        .map(|(q, b)| [b[0] + q[0] as f64, b[1] + q[1] as f64, b[2] + q[2] as f64])
+                        .collect(),
+                );
+                names[g] = local_names[j].clone();
+            }
+        }
+        for (t, w) in weight_keys(path, doc, mi, rig.len(), &get)? {
+            if keys.last().is_some_and(|(last, _)| t <= *last) {
+                continue;
+            }
+            let mut row = vec![0.0; n];
+            for (j, x) in w.into_iter().enumerate() {
+                row[rig[j]] = x;
+            }
+            keys.push((t, row));
+        }
+    }
+    let targets = targets
+        .into_iter()
+        .enumerate()
+        .map(|(g, t)| {
+            t.ok_or_else(|| {
+                IoError::content(path, format!("split rig: no mesh holds morph target {g}"))
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Some((names, targets, keys)))
+}

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Sizes and load times of morphkit's animation outputs (the README's "Output formats" table).
+#
+# Usage: tools/measure-outputs.sh MORPHKIT_BINARY DATA_DIR OUT_DIR [OLD_MORPHKIT_BINARY]
+# Writes a 10-frame camel (horse-01…10 transferred onto the camel) and a 2 100-frame linear
+# blend of the 420-vertex cragl tube as GLB (with and without normals), PC2 and USDA, and, with
+# OLD_MORPHKIT_BINARY, the GLB of an older build for comparison; prints their sizes, then the
+# three.js load times (tools/threejs-check, best of 3) and, when blender is on PATH, the
+# Blender import times (tools/blender-check).
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+bin="$1" data="$2" out="$3" old="${4:-}"
+mkdir -p "$out"
+cd "$out"
+h="$data/sumner-horse-camel" c="$data/cragl-bending-cylinder"
+"$bin" transfer --source-ref "$h/horse-reference.obj.gz" --source "$h/horse-[01][0-9].obj.gz" \
+  --target "$h/camel-reference.obj.gz" --markers "$h/markers-horse-camel.json" --out camel10 --force
+"$bin" blend --base "$c/cylinder-rest.obj" --target "$c/cylinder-bend-4.obj" --frames 2100 \
+  --linear --out tube2100 --force
+for n in camel10 tube2100; do
+  [ -n "$old" ] && "$old" convert "$n" "$n-old.glb" 2>/dev/null
+  "$bin" convert "$n" "$n.glb" 2>/dev/null
+  "$bin" convert "$n" --no-normals "$n-no-normals.glb" 2>/dev/null
+  "$bin" convert "$n" "$n.pc2" 2>/dev/null
+  "$bin" convert "$n" "$n.usda" 2>/dev/null
+done
+ls -l ./*.glb ./*.pc2 ./*.usda | awk '{printf "%12d  %s\n", $5, $9}'
+(cd "$here/threejs-check" && npm ci --no-audit --no-fund --loglevel=error)
+for g in ./*.glb; do
+  frames="${g%.glb}"; frames="${frames%-old}"; frames="${frames%-no-normals}"
+  best=""
+  for _ in 1 2 3; do
+    t=$(node "$here/threejs-check/check.mjs" "$g" "$frames" | node -e \
+      'let s="";process.stdin.on("data",d=>s+=d).on("end",()=>{const r=JSON.parse(s);console.log(Math.round(r.loadMs)+(r.ok?"":" (does not play: "+r.problems[0]+")"))})' || true)
+    best="$best $t"
+  done
+  echo "three.js $g: load ms$best"
+  if command -v blender >/dev/null 2>&1; then
+    last=$(ls "$frames"/frame_*.obj | tail -1)
+    blender -b --factory-startup --python "$here/blender-check/import_glb.py" -- "$g" "$last" 2>&1 | grep BLENDER || true
+  fi
+done

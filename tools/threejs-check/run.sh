@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# End-to-end viewer test (issue 15): GLBs that the morphkit CLI writes play in three.js
+# (GLTFLoader + AnimationMixer) in headless Chromium, key by key equal to the OBJ frames, and
+# render (SwiftShader WebGL2) a first and a last frame that are drawn and differ.
+#
+# Usage: tools/threejs-check/run.sh MORPHKIT_BINARY DATA_DIR OUT_DIR
+#   DATA_DIR is the shared data (cragl-bending-cylinder, sumner-horse-gallop); OUT_DIR receives
+#   the GLBs, their OBJ frames, screenshots (OUT_DIR/shots) and results.jsonl.
+# Needs node/npm and Debian's chromium (or $CHROMIUM); fails with a message when either is
+# missing. three and playwright-core come from the npm registry (package-lock.json); no
+# browser is downloaded.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+if [ $# -ne 3 ]; then
+  echo "usage: $0 MORPHKIT_BINARY DATA_DIR OUT_DIR" >&2
+  exit 2
+fi
+bin="$1" data="$2" out="$3"
+chromium="${CHROMIUM:-/usr/bin/chromium}"
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+  echo "threejs-check: node and npm are missing; install them (apt-get install -y nodejs npm)" >&2
+  exit 1
+fi
+if [ ! -x "$chromium" ]; then
+  echo "threejs-check: Chromium is missing at $chromium; install Debian's chromium (apt-get install -y chromium) or set CHROMIUM" >&2
+  exit 1
+fi
+(cd "$here" && npm ci --no-audit --no-fund --loglevel=error)
+mkdir -p "$out"
+cyl="$data/cragl-bending-cylinder"
+# A 2 100-frame blend of a 420-vertex tube: more morph targets than one WebGL2 mesh holds.
+"$bin" blend --base "$cyl/cylinder-rest.obj" --target "$cyl/cylinder-bend-4.obj" --frames 2100 \
+  --linear --out "$out/tube2100" --force
+"$bin" convert "$out/tube2100" "$out/tube2100.glb"
+# A physical blend as OBJ frames, and the same frames as GLB.
+"$bin" blend --base "$cyl/cylinder-rest.obj" --target "$cyl/cylinder-bend-4.obj" --frames 24 \
+  --out "$out/bend24" --force
+"$bin" convert "$out/bend24" "$out/bend24.glb"
+# A real sequence converted from OBJ files.
+"$bin" convert "$data/sumner-horse-gallop/horse-gallop-*.obj.gz" "$out/horse-gallop" --force
+"$bin" convert "$out/horse-gallop" "$out/horse-gallop.glb"
+node "$here/check.mjs" --shots "$out/shots" \
+  "$out/tube2100.glb" "$out/tube2100" \
+  "$out/bend24.glb" "$out/bend24" \
+  "$out/horse-gallop.glb" "$out/horse-gallop" | tee "$out/results.jsonl"
+# The check must be able to fail: the same 2 100 frames in one mesh (no split) stay at frame 0
+# in WebGL (texSubImage3D out of range), and the check has to say so.
+"$bin" convert "$out/tube2100" --max-targets 0 "$out/tube2100-one-mesh.glb"
+if node "$here/check.mjs" "$out/tube2100-one-mesh.glb" "$out/tube2100" >"$out/one-mesh.jsonl"; then
+  echo "threejs-check: the unsplit 2 100-target GLB passed, but WebGL cannot play it; the check is broken" >&2
+  exit 1
+fi
+echo "threejs-check: all GLBs play to their last frame; the unsplit one is caught as expected"
