@@ -50,6 +50,7 @@ fn main() {
         Command::Blend(_) => "blend",
         Command::Correspond(_) => "correspond",
         Command::Transfer(_) => "transfer",
+        Command::Rig(_) => "rig",
         Command::Flex(_) => "flex",
         Command::Synth(_) => "synth",
         Command::Bench(_) => "bench",

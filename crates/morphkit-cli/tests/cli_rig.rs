@@ -39,6 +39,16 @@ fn write_tube(path: &Path, scale: f64, bend: f64) {
     std::fs::write(path, text).unwrap();
 }
 
+/// A GLB's JSON (without `scenes[0].extras.morphkit.command`) and its binary chunk.
+fn glb_parts(b: &[u8]) -> (serde_json::Value, Vec<u8>) {
+    let len = u32::from_le_bytes(b[12..16].try_into().unwrap()) as usize;
+    let mut json: serde_json::Value = serde_json::from_slice(&b[20..20 + len]).unwrap();
+    if let Some(m) = json["scenes"][0]["extras"]["morphkit"].as_object_mut() {
+        m.remove("command");
+    }
+    (json, b[20 + len..].to_vec())
+}
+
 #[test]
 fn rig_writes_named_morph_targets_shapes_and_a_report() {
     let d = tmp_dir("rig");
@@ -129,7 +139,11 @@ fn rig_writes_named_morph_targets_shapes_and_a_report() {
         "--out",
         s(&again),
     ]);
-    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
+    // Same bytes but for the command line in the extras (its --out differs).
+    let (j1, b1) = glb_parts(&std::fs::read(&out).unwrap());
+    let (j2, b2) = glb_parts(&std::fs::read(&again).unwrap());
+    assert_eq!(b1, b2, "binary chunks differ");
+    assert_eq!(j1, j2, "JSON chunks differ beyond the command line");
     // A GLB with morph targets as the source: its names and base are used.
     let from_glb = d.join("from-glb.glb");
     ok(&[
@@ -159,7 +173,7 @@ fn rig_writes_named_morph_targets_shapes_and_a_report() {
         "--out",
         s(&d.join("rig.obj")),
     ]);
-    assert!(e.contains(".glb or .gltf"), "{e}");
+    assert!(e.contains(".glb, .gltf or .usda"), "{e}");
     let e = fails(&[
         "rig",
         "--source-shapes",
@@ -174,4 +188,68 @@ fn rig_writes_named_morph_targets_shapes_and_a_report() {
     assert!(e.contains("--source-neutral"), "{e}");
     assert!(!d.join("x.glb").exists());
     let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn rig_as_usd_blend_shapes() {
+    let d = tmp_dir("rig-usd");
+    write_tube(&d.join("neutral.obj"), 1.0, 0.0);
+    write_tube(&d.join("jawOpen.obj"), 1.0, 0.8);
+    write_tube(&d.join("smile.obj"), 1.0, 0.3);
+    write_tube(&d.join("head.obj"), 2.0, 0.0);
+    let pairs: Vec<[u32; 2]> = [0u32, 3, 5, 30, 33, 36, 70, 73, 77]
+        .iter()
+        .map(|&v| [v, v])
+        .collect();
+    std::fs::write(
+        d.join("m.json"),
+        serde_json::json!({ "pairs": pairs }).to_string(),
+    )
+    .unwrap();
+    let out = d.join("head-rig.usda");
+    ok(&[
+        "rig",
+        "--source-neutral",
+        s(&d.join("neutral.obj")),
+        "--source-shapes",
+        s(&d.join("jawOpen.obj")),
+        s(&d.join("smile.obj")),
+        "--target",
+        s(&d.join("head.obj")),
+        "--markers",
+        s(&d.join("m.json")),
+        "--out",
+        s(&out),
+    ]);
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        text.contains("skel:blendShapes = [\"jawOpen\", \"smile\"]"),
+        "{text}"
+    );
+    assert!(text.contains("def BlendShape \"jawOpen\""));
+    if let Some(script) = std::env::var_os("MORPHKIT_USD_CHECK") {
+        let r = Command::new("python3")
+            .arg(script)
+            .args(["--blendshapes", "jawOpen,smile"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let t = String::from_utf8_lossy(&r.stdout);
+        assert!(r.status.success() && t.contains(": 0 errors"), "{t}");
+    }
+    // Other extensions are refused before any work.
+    let e = fails(&[
+        "rig",
+        "--source-neutral",
+        s(&d.join("neutral.obj")),
+        "--source-shapes",
+        s(&d.join("smile.obj")),
+        "--target",
+        s(&d.join("head.obj")),
+        "--markers",
+        s(&d.join("m.json")),
+        "--out",
+        s(&d.join("rig.pc2")),
+    ]);
+    assert!(e.contains(".usda"), "{e}");
 }

@@ -47,7 +47,8 @@ pub struct RigArgs {
     /// A correspondence written by `morphkit correspond`.
     #[arg(long, value_name = "JSON")]
     pub correspondence: Option<PathBuf>,
-    /// Output rig: .glb or .gltf, the target with one named morph target per shape.
+    /// Output rig: .glb or .gltf, the target with one named morph target per shape, or .usda
+    /// (UsdSkel blend shapes with the same names).
     #[arg(long, value_name = "GLB")]
     pub out: PathBuf,
     /// Also write every transferred shape as DIR/NAME.obj (the directory is created).
@@ -133,10 +134,10 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
     }
     if !matches!(
         Format::from_path(&args.out),
-        Some(Format::Glb | Format::Gltf)
+        Some(Format::Glb | Format::Gltf | Format::Usda)
     ) {
         bail!(
-            "--out {}: a rig is written as .glb or .gltf",
+            "--out {}: a rig is written as .glb, .gltf or .usda (UsdSkel blend shapes)",
             args.out.display()
         );
     }
@@ -249,7 +250,12 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
         targets,
         weight_keys: Vec::new(),
     };
-    outputs.gltf(&args.out, &rig)?;
+    // Named after the new head.
+    if Format::from_path(&args.out) == Some(Format::Usda) {
+        outputs.usd_blendshapes(&args.out, &rig, std::slice::from_ref(&args.target))?;
+    } else {
+        outputs.gltf_from(&args.out, &rig, std::slice::from_ref(&args.target))?;
+    }
     let total = t_all.elapsed().as_secs_f64();
     eprintln!(
         "transferred {} shapes onto {} vertices: factorization {:.3} s, {:.1} ms per shape, {:.2} s in all",
