@@ -539,6 +539,17 @@ impl Outputs {
         })?)
     }
 
+    /// Stages an output that `write` produces at the temporary path it is given (a file, or a
+    /// directory when `dir`): for writers without a method of their own.
+    pub fn custom(
+        &mut self,
+        path: &Path,
+        dir: bool,
+        write: impl FnOnce(&Path) -> Result<(), io::IoError>,
+    ) -> anyhow::Result<()> {
+        Ok(self.staging.write(path, dir, write)?)
+    }
+
     /// Stages a JSON document (pretty-printed).
     pub fn json(&mut self, path: &Path, value: &serde_json::Value) -> anyhow::Result<()> {
         let text = serde_json::to_string_pretty(value)?;

@@ -122,14 +122,6 @@ pub fn read_json(path: &Path, what: &str) -> anyhow::Result<serde_json::Value> {
         .map_err(|e| anyhow::anyhow!("{}: invalid JSON: {e}", path.display()))
 }
 
-/// Writes a JSON report atomically (temporary file, then rename). Subcommands that plan all
-/// their outputs up front use [`crate::outputs::Outputs::json`] instead.
-pub fn write_report(path: &std::path::Path, value: &serde_json::Value) -> anyhow::Result<()> {
-    let text = serde_json::to_string_pretty(value)?;
-    morphkit::io::write_atomic(path, text.as_bytes()).map_err(|e| anyhow::anyhow!("{e}"))?;
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

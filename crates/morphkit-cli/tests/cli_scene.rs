@@ -106,3 +106,37 @@ fn scene_errors_name_the_line_and_key_and_scene_excludes_base() {
     ]);
     assert!(e.contains("cannot be used with"), "{e}");
 }
+
+#[test]
+fn scene_outputs_are_planned_together_before_any_work() {
+    let d = tmp_dir("scene-plan");
+    let end = write_rig(&d);
+    std::fs::write(
+        d.join("scene.toml"),
+        SCENE.replace("END", &format!("{end:?}")),
+    )
+    .unwrap();
+    let scene = d.join("scene.toml");
+    // The same path twice, and an output in a missing directory: refused, nothing written.
+    let e = fails(&[
+        "blend",
+        "--scene",
+        s(&scene),
+        "--out",
+        s(&d.join("x.glb")),
+        "--report",
+        s(&d.join("x.glb")),
+    ]);
+    assert!(e.contains("x.glb"), "{e}");
+    let e = fails(&[
+        "blend",
+        "--scene",
+        s(&scene),
+        "--out",
+        s(&d.join("out.glb")),
+        "--report",
+        s(&d.join("nodir/r.json")),
+    ]);
+    assert!(e.contains("nodir"), "{e}");
+    assert!(!d.join("x.glb").exists() && !d.join("out.glb").exists());
+}

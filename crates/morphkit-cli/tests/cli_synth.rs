@@ -137,3 +137,53 @@ fn synth_errors_are_one_line_naming_the_recipe_line() {
     assert!(e.contains("bad.toml:5: scribbel: unknown field"), "{e}");
     assert_eq!(e.trim_end().lines().count(), 1, "{e}");
 }
+
+#[test]
+fn flex_and_synth_plan_their_outputs_before_any_work() {
+    let d = setup("plan");
+    let frames = p(&d, "frames");
+    // flex: --out and --json the same file; an --out that is not .ply.
+    let e = fails(&[
+        "flex",
+        "--reference",
+        &p(&d, "bar.obj"),
+        "--frames",
+        &frames,
+        "--out",
+        &p(&d, "f.ply"),
+        "--json",
+        &p(&d, "f.ply"),
+    ]);
+    assert!(e.contains("f.ply"), "{e}");
+    let e = fails(&[
+        "flex",
+        "--reference",
+        &p(&d, "bar.obj"),
+        "--frames",
+        &frames,
+        "--out",
+        &p(&d, "f.obj"),
+    ]);
+    assert!(e.contains(".ply"), "{e}");
+    assert!(!d.join("f.ply").exists() && !d.join("f.obj").exists());
+    // synth: the report where the frames go; a report in a missing directory.
+    let e = fails(&[
+        "synth",
+        &p(&d, "recipe.toml"),
+        "--out",
+        &p(&d, "o.pc2"),
+        "--report",
+        &p(&d, "o.pc2"),
+    ]);
+    assert!(e.contains("o.pc2"), "{e}");
+    let e = fails(&[
+        "synth",
+        &p(&d, "recipe.toml"),
+        "--out",
+        &p(&d, "o.pc2"),
+        "--report",
+        &p(&d, "nodir/r.json"),
+    ]);
+    assert!(e.contains("nodir"), "{e}");
+    assert!(!d.join("o.pc2").exists() && !d.join("o.selection.ply").exists());
+}

@@ -297,7 +297,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
         .clamp(1, 64);
     if super::volume::requested(a) {
-        return super::volume::run(a, &shapes, &weights, &options, threads, start);
+        return super::volume::run(a, &shapes, &weights, &options, threads, start, outputs);
     }
     if !a.linear {
         crate::util::announce_work("setting up the physical blend", shapes.num_vertices());

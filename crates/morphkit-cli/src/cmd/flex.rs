@@ -1,6 +1,7 @@
 //! `morphkit flex`: per-triangle flexibility of an animation (Wang & Lee 2008, Sec. 3.1.1,
 //! Eq. 1), as face colours and numbers, on the source or, through a correspondence, the target.
 
+use crate::outputs::{Kind, Plan};
 use crate::util::progress;
 use anyhow::Context;
 use morphkit::io::{self, Colors};
@@ -70,10 +71,16 @@ pub fn run(args: &FlexArgs) -> anyhow::Result<()> {
     inputs.extend(args.target.iter().cloned());
     inputs.extend(args.markers.iter().cloned());
     inputs.extend(args.correspondence.iter().cloned());
-    io::check_not_input(&args.out, &inputs)?;
-    if let Some(j) = &args.json {
-        io::check_not_input(j, &inputs)?;
+    if io::Format::from_path(&args.out) != Some(io::Format::Ply) {
+        anyhow::bail!(
+            "--out {}: flexibility colours are written as .ply",
+            args.out.display()
+        );
     }
+    let mut outputs = Plan::new(&inputs)
+        .output("--out", &args.out, Kind::Mesh)
+        .output_opt("--json", args.json.as_ref(), Kind::Json)
+        .check()?;
     let reference = io::read_mesh(&args.reference)?;
     let frames = super::transfer::read_frames(&expanded.files, &args.reference)?;
     frames
@@ -119,7 +126,7 @@ pub fn run(args: &FlexArgs) -> anyhow::Result<()> {
     let topo = Topology::new(mesh.num_vertices(), &mesh.triangles);
     let parts = Partitions::new(&flex, &topo, args.gamma)?;
     let colors = flexibility_colors(&flex.values, args.gamma);
-    io::write_ply_colored(&args.out, &mesh, &Colors::PerFace(colors))?;
+    outputs.colored_ply(&args.out, &mesh, &Colors::PerFace(colors))?;
     let n = flex.values.len().max(1) as f64;
     let mean = flex.values.iter().sum::<f64>() / n;
     let above = flex.values.iter().filter(|&&f| f >= args.gamma).count();
@@ -133,9 +140,8 @@ pub fn run(args: &FlexArgs) -> anyhow::Result<()> {
         args.gamma,
         parts.num_stiff()
     );
-    eprintln!("wrote {}", args.out.display());
     if let Some(j) = &args.json {
-        crate::util::write_report(
+        outputs.json(
             j,
             &json!({
                 "reference": args.reference,
@@ -150,6 +156,10 @@ pub fn run(args: &FlexArgs) -> anyhow::Result<()> {
                 "flexibility": flex.values,
             }),
         )?;
+    }
+    outputs.commit()?;
+    eprintln!("wrote {}", args.out.display());
+    if let Some(j) = &args.json {
         eprintln!("wrote {}", j.display());
     }
     Ok(())

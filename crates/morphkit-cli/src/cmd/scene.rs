@@ -2,7 +2,8 @@
 //! vertices (Ma et al. 2012, Sec. 4). The scene file format is documented in
 //! `morphkit::scene::Scene`; this file only runs it and writes the results.
 
-use crate::util::{progress, write_report};
+use crate::outputs::{Kind, Plan};
+use crate::util::progress;
 use anyhow::{bail, Context};
 use morphkit::io::{self, FramesOptions};
 use morphkit::mesh::ShapeSet;
@@ -17,10 +18,14 @@ pub fn run(scene_path: &Path, out: &Path, report: Option<&Path>) -> anyhow::Resu
     let scene = Scene::load(scene_path)?;
     let mut inputs = scene.inputs.clone();
     inputs.push(scene_path.to_path_buf());
-    io::check_not_input(out, &inputs)?;
-    if let Some(r) = report {
-        io::check_not_input(r, &inputs)?;
-    }
+    let mut outputs = Plan::new(&inputs)
+        .output("--out", out, Kind::MeshOrAnimation)
+        .output_opt(
+            "--report",
+            report.map(Path::to_path_buf).as_ref(),
+            Kind::Json,
+        )
+        .check()?;
     let n = scene.weights.len();
     let single = io::Format::from_path(out).is_some_and(|f| f.is_single_mesh());
     if single && n != 1 {
@@ -89,21 +94,25 @@ pub fn run(scene_path: &Path, out: &Path, report: Option<&Path>) -> anyhow::Resu
                 out_set.len(),
             );
             let rig = io::frames_to_gltf(&out_set, scene.fps);
-            let summary = io::write_gltf_scene_with(out, &rig, &tracks, &opts.gltf)?;
-            crate::outputs::report_gltf(out, &summary, &opts.gltf);
+            let mut summary = None;
+            outputs.custom(out, false, |tmp| {
+                summary = Some(io::write_gltf_scene_with(tmp, &rig, &tracks, &opts.gltf)?);
+                Ok(())
+            })?;
+            if let Some(summary) = summary {
+                crate::outputs::report_gltf(out, &summary, &opts.gltf);
+            }
         }
-        _ if single => io::write_mesh(out, &out_set.mesh(0))?,
-        _ => io::write_frames(
+        _ if single => outputs.mesh(out, &out_set.mesh(0))?,
+        _ => outputs.frames(
             out,
             &out_set,
-            &crate::outputs::frames_options(
-                &FramesOptions {
-                    fps: scene.fps,
-                    inputs: inputs.clone(),
-                    ..FramesOptions::default()
-                },
-                out_set.len(),
-            ),
+            &FramesOptions {
+                fps: scene.fps,
+                inputs: inputs.clone(),
+                ..FramesOptions::default()
+            },
+            |_| {},
         )?,
     }
     let write_seconds = t_write.elapsed().as_secs_f64();
@@ -138,8 +147,9 @@ pub fn run(scene_path: &Path, out: &Path, report: Option<&Path>) -> anyhow::Resu
             },
             "frames": rows,
         });
-        write_report(r, &value)?;
+        outputs.json(r, &value)?;
     }
+    outputs.commit()?;
     eprintln!("wrote {n} frame(s) to {}", out.display());
     Ok(())
 }

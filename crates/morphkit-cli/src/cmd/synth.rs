@@ -1,6 +1,7 @@
 //! `morphkit synth`: assemble a new animation of a target from parts of several animations
 //! (Wang & Lee 2008, Sec. 3.2), driven by a TOML recipe.
 
+use crate::outputs::{Kind, Plan};
 use crate::util::progress;
 use anyhow::Context;
 use morphkit::io::{self, Colors, FramesOptions};
@@ -78,12 +79,19 @@ pub fn run(args: &SynthArgs) -> anyhow::Result<()> {
         .selection
         .clone()
         .unwrap_or_else(|| selection_path(&args.out));
-    for p in std::iter::once(&args.out)
-        .chain(args.report.iter())
-        .chain(std::iter::once(&selection))
-    {
-        io::check_not_input(p, &built.inputs)?;
+    if io::Format::from_path(&selection) != Some(io::Format::Ply) {
+        anyhow::bail!(
+            "--selection {}: the selection colours are written as .ply",
+            selection.display()
+        );
     }
+    // Every output is checked before the frames are synthesised (the recipe's inputs are known
+    // once it is built), and all are written or none.
+    let mut outputs = Plan::new(&built.inputs)
+        .output("--out", &args.out, Kind::Animation)
+        .output("--selection", &selection, Kind::Mesh)
+        .output_opt("--report", args.report.as_ref(), Kind::Json)
+        .check()?;
     let mut layers = Vec::new();
     for k in 0..s.num_layers() {
         let info = s.layer_info(k);
@@ -146,27 +154,23 @@ pub fn run(args: &SynthArgs) -> anyhow::Result<()> {
         );
     }
     let set = ShapeSet::new(built.target.clone(), out)?;
-    io::write_frames(
+    outputs.frames(
         &args.out,
         &set,
-        &crate::outputs::frames_options(
-            &FramesOptions {
-                fps: built.fps,
-                inputs: built.inputs.clone(),
-                ..FramesOptions::default()
-            },
-            set.len(),
-        ),
+        &FramesOptions {
+            fps: built.fps,
+            inputs: built.inputs.clone(),
+            ..FramesOptions::default()
+        },
+        |_| {},
     )?;
-    eprintln!("wrote {}", args.out.display());
     let weights: Vec<&[f64]> = (0..s.num_layers())
         .map(|k| s.layer_info(k).weights.values.as_slice())
         .collect();
     let colors = selection_colors(&weights, built.target.num_triangles());
-    io::write_ply_colored(&selection, &built.target, &Colors::PerFace(colors))?;
-    eprintln!("wrote {}", selection.display());
+    outputs.colored_ply(&selection, &built.target, &Colors::PerFace(colors))?;
     if let Some(r) = &args.report {
-        crate::util::write_report(
+        outputs.json(
             r,
             &json!({
                 "recipe": args.recipe,
@@ -189,6 +193,12 @@ pub fn run(args: &SynthArgs) -> anyhow::Result<()> {
                 "flipped_triangles_per_frame": flips,
             }),
         )?;
+    }
+    outputs.commit()?;
+    eprintln!("wrote {}", args.out.display());
+    eprintln!("wrote {}", selection.display());
+    if let Some(r) = &args.report {
+        eprintln!("wrote {}", r.display());
     }
     Ok(())
 }

@@ -10,7 +10,8 @@
 //!   boundary conditions; the result follows its slerp-interpolated rigid motion.
 
 use super::blend::{unconverged_path, weights_json, BlendArgs};
-use crate::util::{progress, write_report};
+use crate::outputs::Outputs;
+use crate::util::progress;
 use anyhow::{bail, Context};
 use morphkit::io::{self, FramesOptions};
 use morphkit::mesh::{ShapeSet, Topology};
@@ -89,6 +90,7 @@ pub fn run(
     options: &BlendOptions,
     threads: usize,
     start: Instant,
+    mut outputs: Outputs,
 ) -> anyhow::Result<()> {
     if a.linear {
         bail!("--linear blends without springs; it cannot be combined with --interior or --anchor");
@@ -165,22 +167,19 @@ pub fn run(
             .iter()
             .map(|&f| if f { [220, 30, 30] } else { [200, 200, 200] })
             .collect();
-        io::write_ply_colored(path, shapes.base(), &io::Colors::PerVertex(colors))?;
+        outputs.colored_ply(path, shapes.base(), &io::Colors::PerVertex(colors))?;
     }
     let out_set = ShapeSet::new(shapes.base().clone(), frames)?;
     let single = io::Format::from_path(&a.out).is_some_and(|f| f.is_single_mesh());
     if single {
-        io::write_mesh(&a.out, &out_set.mesh(0))?;
+        outputs.mesh(&a.out, &out_set.mesh(0))?;
     } else {
-        let fo = crate::outputs::frames_options(
-            &FramesOptions {
-                fps: a.fps,
-                inputs: inputs.clone(),
-                ..FramesOptions::default()
-            },
-            out_set.len(),
-        );
-        io::write_frames(&a.out, &out_set, &fo)?;
+        let fo = FramesOptions {
+            fps: a.fps,
+            inputs: inputs.clone(),
+            ..FramesOptions::default()
+        };
+        outputs.frames(&a.out, &out_set, &fo, |_| {})?;
     }
     if let Some(r) = &a.report {
         let report = json!({
@@ -198,8 +197,9 @@ pub fn run(
             "timings": { "setup_seconds": setup_seconds, "total_seconds": start.elapsed().as_secs_f64() },
             "frames": rows,
         });
-        write_report(r, &report)?;
+        outputs.json(r, &report)?;
     }
+    outputs.commit()?;
     eprintln!("wrote {} frame(s) to {}", weights.len(), a.out.display());
     Ok(())
 }
