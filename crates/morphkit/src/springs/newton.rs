@@ -231,7 +231,10 @@ pub(crate) fn trust_region(
         }
         if rho < 0.25 {
             radius = 0.25 * m_norm.min(radius);
-        } else if rho > 0.75 && step.termination == Termination::Boundary && m_norm >= radius {
+        } else if rho > 0.75 && step.termination == Termination::Boundary && m_norm >= 0.99 * radius
+        {
+            // The step reached the boundary (to round-off: its norm is computed again from the
+            // step, so an exact comparison can fail and freeze the radius).
             radius *= 2.0;
         }
         if rho > 1e-4 {

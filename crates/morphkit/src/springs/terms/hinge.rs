@@ -274,7 +274,9 @@ impl HingeTerm {
             // −ib1 cs r·(e × u1)
             hy[0][1] += sr * (ib1 * cs);
             hy[1][0] -= sr * (ib1 * cs);
-            // −ib1 sn ê·m, m = n1 × r
+            // −ib1 sn ê·m, m = n1 × r. On an edge of zero length ê is undefined; there n1 = 0,
+            // so m = 0 and these blocks vanish in the limit: they are left out where they are
+            // not finite.
             let m = n1.cross(&r);
             let me = m.dot(&eh);
             let mut g = [[Matrix3::<f64>::zeros(); 3]; 3];
@@ -289,34 +291,45 @@ impl HingeTerm {
             g[0][0] += de.transpose() * dm_e + dm_e.transpose() * de;
             g[0][1] += de.transpose() * dm_u1 - ss;
             g[1][0] += dm_u1.transpose() * de + ss;
-            for pp in 0..2 {
-                for qq in 0..2 {
-                    hy[pp][qq] -= g[pp][qq] * (ib1 * sn);
-                }
-            }
-            // Corners: e = b − a, u1 = c − a, u2 = d − a.
-            const MAP: [[f64; 4]; 3] = [
-                [-1.0, 1.0, 0.0, 0.0],
-                [-1.0, 0.0, 1.0, 0.0],
-                [-1.0, 0.0, 0.0, 1.0],
-            ];
-            let w = 2.0 * self.weight[k];
-            for u in 0..4 {
-                for v in u..4 {
-                    let mut blk = j[u].transpose() * j[v];
-                    for (pp, mp) in MAP.iter().enumerate() {
-                        for (qq, mq) in MAP.iter().enumerate() {
-                            let s = mp[u] * mq[v];
-                            if s != 0.0 {
-                                blk += hy[pp][qq] * s;
-                            }
-                        }
+            if g.iter().flatten().all(|b| b.iter().all(|v| v.is_finite())) {
+                for pp in 0..2 {
+                    for qq in 0..2 {
+                        hy[pp][qq] -= g[pp][qq] * (ib1 * sn);
                     }
-                    let b: Block =
-                        std::array::from_fn(|rr| std::array::from_fn(|cc| w * blk[(rr, cc)]));
-                    h.add(hv[u] as usize, hv[v] as usize, &b);
                 }
             }
+            add_blocks(h, hv, &j, &hy, 2.0 * self.weight[k]);
+        }
+    }
+}
+
+/// Adds $w (J^\top J + M^\top H_y M)$ of one hinge: `hy` holds the second-order blocks in the
+/// edge variables $(e, u_1, u_2) = (b - a, c - a, d - a)$, mapped to the corners by $M$.
+fn add_blocks(
+    h: &mut BlockHessian,
+    hv: [u32; 4],
+    j: &[Matrix3<f64>; 4],
+    hy: &[[Matrix3<f64>; 3]; 3],
+    w: f64,
+) {
+    const MAP: [[f64; 4]; 3] = [
+        [-1.0, 1.0, 0.0, 0.0],
+        [-1.0, 0.0, 1.0, 0.0],
+        [-1.0, 0.0, 0.0, 1.0],
+    ];
+    for u in 0..4 {
+        for v in u..4 {
+            let mut blk = j[u].transpose() * j[v];
+            for (pp, mp) in MAP.iter().enumerate() {
+                for (qq, mq) in MAP.iter().enumerate() {
+                    let s = mp[u] * mq[v];
+                    if s != 0.0 {
+                        blk += hy[pp][qq] * s;
+                    }
+                }
+            }
+            let b: Block = std::array::from_fn(|rr| std::array::from_fn(|cc| w * blk[(rr, cc)]));
+            h.add(hv[u] as usize, hv[v] as usize, &b);
         }
     }
 }
@@ -478,6 +491,140 @@ mod tests {
             "min eigenvalue {}",
             eig.min()
         );
+    }
+
+    #[test]
+    fn the_closed_form_hessian_holds_far_from_the_shapes() {
+        // Large perturbations and extrapolated weights: every term of the second-order part
+        // (ê's curvature, the mixed products, the triple products) is exercised.
+        let (term, set) = setup();
+        for (seed, amp, c) in [
+            (5u64, 0.3, [-0.5, 1.5]),
+            (6, 0.5, [1.0, 0.0]),
+            (7, 0.2, [0.2, 0.8]),
+        ] {
+            let p = term.prepare(&c);
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+            let x: Vec<f64> = set
+                .positions(1)
+                .iter()
+                .flatten()
+                .map(|v| v + rng.random_range(-amp..amp))
+                .collect();
+            let exact = dense_hessian(&term, &p, &x, HessianKind::Exact);
+            let worst = hessian_error(&term, &p, &x, &exact);
+            let scale = exact.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(
+                worst < 1e-5 * scale,
+                "seed {seed}: exact Hessian error {worst} (scale {scale})"
+            );
+        }
+    }
+
+    #[test]
+    fn the_closed_form_hessian_holds_on_a_twisted_box() {
+        // Flat faces (θ = 0) and 90° box edges, twisted by 90° (180° would collapse the end's
+        // cross-section to the axis at the linear midpoint: see the collapsed-edge test).
+        let m = generate::bar(4.0, 0.6, 3, 24);
+        let t: Vec<[f64; 3]> = m
+            .positions
+            .iter()
+            .map(|&[x, y, z]| {
+                let (s, c) = (std::f64::consts::FRAC_PI_2 * x / 4.0).sin_cos();
+                [x, c * y - s * z, s * y + c * z]
+            })
+            .collect();
+        let set = ShapeSet::new(
+            m.clone(),
+            vec![("a".into(), m.positions.clone()), ("b".into(), t.clone())],
+        )
+        .unwrap();
+        let topo = Topology::new(m.num_vertices(), &m.triangles);
+        let term = HingeTerm::new(&set, &topo, &HingeOptions::default(), 1.0, 1.0);
+        let p = term.prepare(&[0.5, 0.5]);
+        let x: Vec<f64> = m
+            .positions
+            .iter()
+            .zip(&t)
+            .flat_map(|(a, b)| (0..3).map(move |k| 0.5 * (a[k] + b[k])))
+            .collect();
+        let exact = dense_hessian(&term, &p, &x, HessianKind::Exact);
+        let worst = hessian_error(&term, &p, &x, &exact);
+        let scale = exact.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(
+            worst < 1e-5 * scale,
+            "exact Hessian error {worst} (scale {scale})"
+        );
+    }
+
+    #[test]
+    fn the_closed_form_hessian_holds_on_single_hinges() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut worst_rel: f64 = 0.0;
+        for trial in 0..200 {
+            let mut r = || -> [f64; 3] { std::array::from_fn(|_| rng.random_range(-1.0..1.0)) };
+            let p0 = vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.5, 1.0, 0.0],
+                [0.5, -1.0, 0.2],
+            ];
+            let p1: Vec<[f64; 3]> = (0..4).map(|_| r()).collect();
+            let m = crate::mesh::TriMesh::new(p0.clone(), vec![[0, 1, 2], [1, 0, 3]]);
+            let Ok(set) =
+                ShapeSet::new(m.clone(), vec![("a".into(), p0.clone()), ("b".into(), p1)])
+            else {
+                continue;
+            };
+            let topo = Topology::new(4, &m.triangles);
+            let opts = HingeOptions {
+                min_fold_margin: 0.0,
+                ..HingeOptions::default()
+            };
+            let term = HingeTerm::new(&set, &topo, &opts, 1.0, 1.0);
+            if term.len() == 0 {
+                continue;
+            }
+            let p = term.prepare(&[0.3, 0.7]);
+            let x: Vec<f64> = (0..4).flat_map(|_| r()).collect();
+            let exact = dense_hessian(&term, &p, &x, HessianKind::Exact);
+            let worst = hessian_error(&term, &p, &x, &exact);
+            let scale = exact.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+            worst_rel = worst_rel.max(worst / scale.max(1e-300));
+            assert!(
+                worst < 1e-4 * scale,
+                "trial {trial}: error {worst} (scale {scale})"
+            );
+        }
+        eprintln!("worst relative error {worst_rel:e}");
+    }
+
+    #[test]
+    fn a_collapsed_hinge_edge_gives_a_finite_hessian() {
+        // A blend can pass through a state where a hinge's edge has zero length (a twisted
+        // bar's axis); the Hessian must stay finite there (ê is undefined, its blocks vanish).
+        let p0 = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.5, 1.0, 0.0],
+            [0.5, -1.0, 0.2],
+        ];
+        let m = crate::mesh::TriMesh::new(p0.clone(), vec![[0, 1, 2], [1, 0, 3]]);
+        let set =
+            ShapeSet::new(m.clone(), vec![("a".into(), p0.clone()), ("b".into(), p0)]).unwrap();
+        let term = HingeTerm::new(
+            &set,
+            &Topology::new(4, &m.triangles),
+            &HingeOptions::default(),
+            1.0,
+            1.0,
+        );
+        let p = term.prepare(&[1.0, 0.0]);
+        let x = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5, 1.0, 0.0, 0.5, -1.0, 0.2];
+        for kind in [HessianKind::Exact, HessianKind::Projected] {
+            let h = dense_hessian(&term, &p, &x, kind);
+            assert!(h.iter().flatten().all(|v| v.is_finite()), "{kind:?}");
+        }
     }
 
     #[test]
