@@ -582,7 +582,7 @@ mod tests {
                 ..HingeOptions::default()
             };
             let term = HingeTerm::new(&set, &topo, &opts, 1.0, 1.0);
-            if term.len() == 0 {
+            if term.is_empty() {
                 continue;
             }
             let p = term.prepare(&[0.3, 0.7]);
