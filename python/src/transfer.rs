@@ -256,10 +256,7 @@ impl PyTransfer {
             ));
         }
         let inner = &self.inner;
-        let x = py
-            .detach(|| inner.transfer_frame(&frame))
-            .py(Kind::Transfer)?;
-        Ok(to_array(py, &x))
+        one(py, &frame, |f| inner.transfer_frame(f))
     }
 
     /// Every frame of `frames` (`(k, n_s, 3)` or a list) onto the target: `(k, n_t, 3)`.
@@ -268,17 +265,13 @@ impl PyTransfer {
         py: Python<'py>,
         frames: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        let frames = arrays::frames("frames", frames, Some(self.source_vertices))?;
         let inner = &self.inner;
-        let out = py
-            .detach(|| {
-                frames
-                    .iter()
-                    .map(|f| inner.transfer_frame(f))
-                    .collect::<Result<Vec<_>, _>>()
-            })
-            .py(Kind::Transfer)?;
-        Ok(to_array3(py, &out, self.target_vertices))
+        many(
+            py,
+            ("frames", frames),
+            (self.source_vertices, self.target_vertices),
+            |_, f| inner.transfer_frame(f),
+        )
     }
 
     fn __repr__(&self) -> String {
@@ -345,10 +338,7 @@ impl PyRigTransfer {
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let shape = arrays::points("shape", shape)?;
         let inner = &self.inner;
-        let (x, _) = py
-            .detach(|| inner.transfer_shape(0, &shape))
-            .py(Kind::Transfer)?;
-        Ok(to_array(py, &x))
+        one(py, &shape, |s| inner.transfer_shape(0, s).map(|(x, _)| x))
     }
 
     /// Every expression of `shapes` (`(k, n_s, 3)` or a list) onto the target: `(k, n_t, 3)`.
@@ -357,17 +347,49 @@ impl PyRigTransfer {
         py: Python<'py>,
         shapes: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        let shapes = arrays::frames("shapes", shapes, Some(self.source_vertices))?;
         let inner = &self.inner;
-        let out = py
-            .detach(|| {
-                shapes
-                    .iter()
-                    .enumerate()
-                    .map(|(i, s)| inner.transfer_shape(i, s).map(|(x, _)| x))
-                    .collect::<Result<Vec<_>, _>>()
-            })
-            .py(Kind::Transfer)?;
-        Ok(to_array3(py, &out, self.target_vertices))
+        many(
+            py,
+            ("shapes", shapes),
+            (self.source_vertices, self.target_vertices),
+            |i, s| inner.transfer_shape(i, s).map(|(x, _)| x),
+        )
     }
+}
+
+type Points = Vec<morphkit::mesh::Point>;
+
+/// One transfer with the GIL released: a new `(n_t, 3)` array.
+fn one<'py>(
+    py: Python<'py>,
+    input: &[morphkit::mesh::Point],
+    f: impl Fn(&[morphkit::mesh::Point]) -> Result<Points, morphkit::transfer::TransferError>
+        + Send
+        + Sync,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let x = py.detach(|| f(input)).py(Kind::Transfer)?;
+    Ok(to_array(py, &x))
+}
+
+/// Every frame of `frames` (`(k, n_s, 3)` or a list, named `name` in errors) through `f`,
+/// with the GIL released: a new `(k, n_t, 3)` array.
+fn many<'py>(
+    py: Python<'py>,
+    (name, frames): (&str, &Bound<'py, PyAny>),
+    (n_s, n_t): (usize, usize),
+    f: impl Fn(usize, &[morphkit::mesh::Point]) -> Result<Points, morphkit::transfer::TransferError>
+        + Send
+        + Sync,
+) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    let frames = arrays::frames(name, frames, Some(n_s))?;
+    let out = py
+        .detach(|| {
+            frames
+                .iter()
+                .enumerate()
+                .map(|(i, x)| f(i, x))
+                .collect::<Result<Vec<_>, _>>()
+        })
+        .py(Kind::Transfer)?;
+    Ok(to_array3(py, &out, n_t))
 }

@@ -10,33 +10,9 @@ use common::*;
 use std::path::Path;
 use std::process::Command;
 
-/// An open tube, bent by `bend` radians and scaled by `scale`, as OBJ.
+/// The rig tests' tube: 10 × 8 vertices.
 fn write_tube(path: &Path, scale: f64, bend: f64) {
-    let (nu, nv, h) = (10, 8, 4.0);
-    let mut text = String::new();
-    for j in 0..nv {
-        let z = h * j as f64 / (nv - 1) as f64;
-        for i in 0..nu {
-            let a = std::f64::consts::TAU * i as f64 / nu as f64;
-            let (x, y) = (a.cos(), a.sin());
-            let (px, pz) = if bend == 0.0 {
-                (x, z)
-            } else {
-                let r = h / bend;
-                let th = bend * z / h;
-                (r - (r - x) * th.cos(), (r - x) * th.sin())
-            };
-            text += &format!("v {} {} {}\n", scale * px, scale * y, scale * pz);
-        }
-    }
-    let id = |i: usize, j: usize| j * nu + i % nu + 1;
-    for j in 0..nv - 1 {
-        for i in 0..nu {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            text += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
-        }
-    }
-    std::fs::write(path, text).unwrap();
+    common::write_tube(path, 10, 8, scale, bend);
 }
 
 /// A GLB's JSON (without `scenes[0].extras.morphkit.command`) and its binary chunk.

@@ -48,3 +48,33 @@ pub fn fails(args: &[&str]) -> String {
 pub fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
+
+/// An open tube of `nu` × `nv` vertices along z (height 4), bent by `bend` radians about the
+/// y axis and scaled by `scale`, written as OBJ.
+pub fn write_tube(path: &std::path::Path, nu: usize, nv: usize, scale: f64, bend: f64) {
+    let h = 4.0;
+    let mut text = String::new();
+    for j in 0..nv {
+        let z = h * j as f64 / (nv - 1) as f64;
+        for i in 0..nu {
+            let a = std::f64::consts::TAU * i as f64 / nu as f64;
+            let (x, y) = (a.cos(), a.sin());
+            let (px, pz) = if bend == 0.0 {
+                (x, z)
+            } else {
+                let r = h / bend;
+                let th = bend * z / h;
+                (r - (r - x) * th.cos(), (r - x) * th.sin())
+            };
+            text += &format!("v {} {} {}\n", scale * px, scale * y, scale * pz);
+        }
+    }
+    let id = |i: usize, j: usize| j * nu + i % nu + 1;
+    for j in 0..nv - 1 {
+        for i in 0..nu {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            text += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
+        }
+    }
+    std::fs::write(path, text).unwrap();
+}
