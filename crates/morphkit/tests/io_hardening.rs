@@ -314,3 +314,42 @@ fn an_empty_accessor_is_an_error() {
     assert!(e.contains("expected an unsigned integer type"), "{e}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Found by `cargo fuzz` (target `gltf`, 10-minute run): an animation sampler whose input (or
+/// output) accessor is a VEC3 made the `gltf` crate's reader fail an element-size assertion.
+#[test]
+fn a_sampler_accessor_of_the_wrong_type_is_an_error() {
+    let d = tmp_dir("gltf-sampler");
+    let g = d.join("a.gltf");
+    let set = morphkit::ShapeSet::new(
+        quad(),
+        vec![
+            ("a".into(), quad().positions),
+            (
+                "b".into(),
+                quad().positions.iter().map(|p| [p[0], p[1], 1.0]).collect(),
+            ),
+        ],
+    )
+    .unwrap();
+    io::write_frames(&g, &set, &Default::default()).unwrap();
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&g).unwrap()).unwrap();
+    let vec3 = doc["accessors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|a| a["type"] == "VEC3")
+        .unwrap();
+    for field in ["input", "output"] {
+        let mut bad = doc.clone();
+        bad["animations"][0]["samplers"][0][field] = vec3.into();
+        std::fs::write(&g, bad.to_string()).unwrap();
+        let e = err(&g);
+        assert!(
+            e.contains(&format!("the {field} accessor {vec3} must be SCALAR")),
+            "{e}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

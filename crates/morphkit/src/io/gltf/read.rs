@@ -361,6 +361,29 @@ pub(super) fn weight_keys<'a, 's>(
                     format!("animation {}, channel {}: {m}", anim.index(), ch.index()),
                 )
             };
+            // The gltf crate's readers assert that an accessor's element size matches what
+            // they decode (a VEC3 input panicked; found by cargo fuzz): check types first.
+            let (input, output) = (ch.sampler().input(), ch.sampler().output());
+            if input.dimensions() != Dimensions::Scalar || input.data_type() != DataType::F32 {
+                return Err(at(format!(
+                    "the input accessor {} must be SCALAR float (key times), not {:?} {:?}",
+                    input.index(),
+                    input.dimensions(),
+                    input.data_type()
+                )));
+            }
+            let weight_type = matches!(
+                output.data_type(),
+                DataType::F32 | DataType::I8 | DataType::U8 | DataType::I16 | DataType::U16
+            );
+            if output.dimensions() != Dimensions::Scalar || !weight_type {
+                return Err(at(format!(
+                    "the output accessor {} must be SCALAR weights, not {:?} {:?}",
+                    output.index(),
+                    output.dimensions(),
+                    output.data_type()
+                )));
+            }
             let reader = ch.reader(get.clone());
             let times: Vec<f32> = reader
                 .read_inputs()
