@@ -220,7 +220,7 @@ fn cat_dog_cycle_consistency_improves() {
 /// radius factor, the most matches, the closest-point weights, the identity weight, and `a`
 /// for area-weighted solves.
 #[test]
-#[ignore]
+#[ignore = "a tuning tool, not a check: it prints measurements of the EXPLORE variants and asserts nothing; run it with --ignored"]
 fn explore() {
     let (Some(h), Some(c), Some(mk)) = (
         common::data_file("sumner-horse-camel/horse-reference.obj.gz"),
