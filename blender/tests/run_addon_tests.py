@@ -166,7 +166,6 @@ results["baked_frames"] = int(frames.shape[0])
 cyl.modifiers.remove(cyl.modifiers["morphkit physical"])
 
 # An obstacle in the bending half's path (Fig. 2): a closed mesh object with morphkit_obstacle.
-key.animation_data_clear() if hasattr(key, "animation_data_clear") else None
 cyl.data.shape_keys.animation_data_clear()
 bar_mesh = bpy.data.meshes.new("bar")
 import bmesh  # noqa: E402
