@@ -8,8 +8,15 @@ objects (Empties) with a custom property `morphkit_vertex` (a vertex id), parent
 or naming it in `morphkit_pull_target`: the vertex is held at the Empty's position (Fig. 5).
 Obstacles are closed mesh objects with a custom property `morphkit_obstacle` (true): the blend
 collides with them (Fig. 2; the solver is rebuilt when an obstacle moves).
+
+Live mode answers a slider at once: it shows the blend's predictor (the rotation-aware
+interpolation every solve starts from, exact at each key; milliseconds) and solves the
+equilibrium on a background thread, which replaces the preview when it is ready, unless the
+sliders moved on meanwhile (then the newest values are solved next). The result is the same
+equilibrium the "Physical" button gives; only when it is shown depends on time.
 """
 
+import threading
 import time
 
 import bpy
@@ -18,9 +25,12 @@ import numpy as np
 from . import geometry
 
 RESULT_KEY = "morphkit_physical"
-_solvers = {}  # object name -> (signature, PhysicalBlend, F)
-_last = {}  # object name -> weights and pulls last solved
+_solvers = {}  # object name -> (signature, PhysicalBlend, F, Predictor)
+_last = {}  # object name -> weights and pulls last solved or asked for
 _busy = [False]
+_jobs = {}  # object name -> _Job solving on a background thread
+_wanted = {}  # object name -> (state, blend, weights, pulls) newest live request
+POLL_SECONDS = 0.05
 
 
 def morphkit_module():
@@ -89,8 +99,15 @@ def solver_for(obj, scene=None):
         blend = morphkit.SceneBlend(base, targets, F, obstacles=obstacles)
     else:
         blend = morphkit.PhysicalBlend(base, targets, F)
-    _solvers[obj.name] = (sig, blend, F)
+    # The predictor is taken now: it must not touch the blend while a job solves with it.
+    _solvers[obj.name] = (sig, blend, F, blend.predictor())
     return blend, F
+
+
+def predictor_for(obj, scene=None):
+    """The predictor of `obj`'s cached solver (built by `solver_for` if needed)."""
+    solver_for(obj, scene)
+    return _solvers[obj.name][3]
 
 
 def pulls_of(obj, scene):
@@ -111,21 +128,20 @@ def weights_of(obj):
     return [k.value for k in target_keys(obj)]
 
 
-def solve_into_key(obj, scene):
-    """Solves for the current sliders and pulls and shows the result; returns seconds."""
-    t0 = time.perf_counter()
-    blend, _ = solver_for(obj, scene)
-    w = weights_of(obj)
-    pulls = pulls_of(obj, scene)
+def _solve(blend, w, pulls):
+    """One equilibrium with morphkit only (no bpy: safe on any thread); (X, stats, contacts)."""
     if isinstance(blend, morphkit_module().SceneBlend):
         if pulls:
             raise morphkit_module().BlendError("pulls and obstacles together are not supported yet")
         X = blend.solve(w)
-        stats = blend.last_stats["solver"]
-        obj["morphkit_contacts"] = blend.last_stats["collision"]["contacts"]
-    else:
-        X = blend.solve(w, pulls=pulls or None)
         stats = blend.last_stats
+        return X, stats["solver"], stats["collision"]["contacts"]
+    X = blend.solve(w, pulls=pulls or None)
+    return X, blend.last_stats, None
+
+
+def _show(obj, X, what):
+    """Shows `X` in the result key (targets muted); `what` is "physical" or "preview"."""
     key = geometry.ensure_key(obj, RESULT_KEY)
     geometry.set_key_coords(key, X)
     key.value = 1.0
@@ -133,11 +149,114 @@ def solve_into_key(obj, scene):
     for k in target_keys(obj):
         k.mute = True
     obj.data.update()
-    _last[obj.name] = (tuple(w), tuple(sorted(pulls.items())))
+    obj["morphkit_showing"] = what
+
+
+def _show_solved(obj, out):
+    X, stats, contacts = out
+    _show(obj, X, "physical")
+    if contacts is not None:
+        obj["morphkit_contacts"] = contacts
     obj["morphkit_last_stats"] = {
         k: v for k, v in stats.items() if isinstance(v, (int, float, bool))
     }
+
+
+def _state(obj, scene):
+    w = weights_of(obj)
+    pulls = pulls_of(obj, scene)
+    return (tuple(w), tuple(sorted(pulls.items()))), w, pulls
+
+
+def solve_into_key(obj, scene):
+    """Solves for the current sliders and pulls and shows the result; returns seconds."""
+    _settle(obj.name)
+    t0 = time.perf_counter()
+    blend, _ = solver_for(obj, scene)
+    state, w, pulls = _state(obj, scene)
+    _show_solved(obj, _solve(blend, w, pulls))
+    _last[obj.name] = state
     return time.perf_counter() - t0
+
+
+class _Job(threading.Thread):
+    """One live solve on a background thread (the solve releases the GIL)."""
+
+    def __init__(self, name, state, blend, w, pulls):
+        super().__init__(daemon=True, name=f"morphkit live {name}")
+        self.state, self.blend, self.w, self.pulls = state, blend, w, pulls
+        self.out = self.error = None
+        self.started_at = time.perf_counter()
+        self.seconds = 0.0
+        self.start()
+
+    def run(self):
+        try:
+            self.out = _solve(self.blend, self.w, self.pulls)
+        except Exception as e:  # reported on the main thread
+            self.error = e
+        self.seconds = time.perf_counter() - self.started_at
+
+
+def _request(obj, scene):
+    """Live update of `obj`: the preview now, the equilibrium from a background job."""
+    blend, _ = solver_for(obj, scene)
+    state, w, pulls = _state(obj, scene)
+    _last[obj.name] = state
+    if not obj.morphkit_live_preview:
+        obj["morphkit_latency_ms"] = 1e3 * solve_into_key(obj, scene)
+        return
+    t0 = time.perf_counter()
+    _show(obj, predictor_for(obj, scene).predict(w), "preview")
+    obj["morphkit_preview_ms"] = 1e3 * (time.perf_counter() - t0)
+    _wanted[obj.name] = (state, blend, w, pulls)
+    if obj.name not in _jobs:
+        _jobs[obj.name] = _Job(obj.name, state, blend, w, pulls)
+    if not bpy.app.timers.is_registered(_poll):
+        bpy.app.timers.register(_poll, first_interval=POLL_SECONDS)
+
+
+def _poll():
+    """Timer: shows finished jobs that are still wanted and starts the newest request."""
+    for name, job in list(_jobs.items()):
+        if job.is_alive():
+            continue
+        del _jobs[name]
+        obj = bpy.data.objects.get(name)
+        wanted = _wanted.get(name)
+        if obj is None or wanted is None or not getattr(obj, "morphkit_live", False):
+            continue
+        if job.error is not None:
+            _wanted.pop(name)
+            print(f"morphkit: {name}: {job.error}")
+        elif job.state == wanted[0] and job.blend is wanted[1]:
+            _wanted.pop(name)
+            _show_solved(obj, job.out)
+            obj["morphkit_latency_ms"] = 1e3 * job.seconds
+        else:  # the sliders moved on while this job solved: solve the newest values
+            _jobs[name] = _Job(name, *wanted)
+    return POLL_SECONDS if _jobs else None
+
+
+def _settle(name):
+    """Waits for `name`'s live job (the blend serves one solve at a time) and drops it."""
+    job = _jobs.pop(name, None)
+    if job is not None:
+        job.join()
+    _wanted.pop(name, None)
+
+
+def finish_live(timeout=300.0):
+    """Waits for the live jobs and shows their results (for scripts and `blender -b`, where
+    timers do not run). Returns whether everything finished within `timeout` seconds."""
+    deadline = time.perf_counter() + timeout
+    while _jobs:
+        for job in list(_jobs.values()):
+            job.join(max(0.0, deadline - time.perf_counter()))
+        if any(j.is_alive() for j in _jobs.values()):
+            return False
+        _poll()
+    return True
 
 
 def show_linear(obj):
@@ -234,6 +353,7 @@ class MORPHKIT_OT_physical_bake(bpy.types.Operator):
             scene.frame_set(f)
             rows.append(weights_of(obj))
         scene.frame_set(current)
+        _settle(obj.name)
         try:
             blend, F = solver_for(obj, scene)
             if isinstance(blend, morphkit.SceneBlend):
@@ -332,10 +452,10 @@ def _live_handler(scene, depsgraph=None):
                 continue
             if obj.data.shape_keys is None:
                 continue
-            state = (tuple(weights_of(obj)), tuple(sorted(pulls_of(obj, scene).items())))
+            state, _, _ = _state(obj, scene)
             if _last.get(obj.name) != state:
                 try:
-                    obj["morphkit_latency_ms"] = 1e3 * solve_into_key(obj, scene)
+                    _request(obj, scene)
                 except Exception as e:  # a handler must never raise into Blender
                     print(f"morphkit: {obj.name}: {e}")
     finally:
@@ -363,6 +483,8 @@ class MORPHKIT_PT_physical(bpy.types.Panel):
             layout.label(text="Select a mesh with shape keys")
             return
         layout.prop(obj, "morphkit_live")
+        if obj.morphkit_live:
+            layout.prop(obj, "morphkit_live_preview")
         if obj.data.shape_keys is not None:
             col = layout.column(align=True)
             for k in target_keys(obj):
@@ -372,6 +494,8 @@ class MORPHKIT_PT_physical(bpy.types.Panel):
         row.operator(MORPHKIT_OT_physical_linear.bl_idname, text="Linear")
         layout.operator(MORPHKIT_OT_physical_bake.bl_idname)
         layout.operator(MORPHKIT_OT_export_scene.bl_idname)
+        if obj.name in _jobs:
+            layout.label(text="solving… (showing the preview)")
         if "morphkit_latency_ms" in obj:
             layout.label(text=f"last solve {obj['morphkit_latency_ms']:.0f} ms")
 
@@ -392,6 +516,12 @@ def register():
         default=False,
         update=_live_changed,
     )
+    bpy.types.Object.morphkit_live_preview = bpy.props.BoolProperty(
+        name="Preview while solving",
+        description="Show the predictor at once and solve the equilibrium in the background "
+        "(off: every change waits for its solve)",
+        default=True,
+    )
     for c in classes:
         bpy.utils.register_class(c)
     bpy.app.handlers.depsgraph_update_post.append(_live_handler)
@@ -404,6 +534,11 @@ def unregister():
             h.remove(_live_handler)
     for c in reversed(classes):
         bpy.utils.unregister_class(c)
+    if bpy.app.timers.is_registered(_poll):
+        bpy.app.timers.unregister(_poll)
+    finish_live()
     del bpy.types.Object.morphkit_live
+    del bpy.types.Object.morphkit_live_preview
     _solvers.clear()
     _last.clear()
+    _wanted.clear()

@@ -117,14 +117,38 @@ results["physical_vs_linear"] = float(np.abs(got - lin).max()) / diag(V0)
 check(results["physical_vs_linear"] > 1e-3, "the physical key equals the linear blend")
 render("physical", cyl)
 
-# Live mode: a slider change re-solves through the depsgraph handler.
+# Live mode: a slider change shows the predictor at once and the equilibrium when the
+# background solve is done; a change during the solve is solved next.
+def result_key():
+    return geometry.key_coords(cyl.data.shape_keys.key_blocks[physical.RESULT_KEY])
+
+
+ref_blend = morphkit.PhysicalBlend(V0, [V1], F_b)
 cyl.morphkit_live = True
+check(cyl.morphkit_live_preview, "preview while solving is not the default")
 key.value = 0.8
 bpy.context.view_layer.update()
 physical._live_handler(bpy.context.scene)
-got = geometry.key_coords(cyl.data.shape_keys.key_blocks[physical.RESULT_KEY])
-err = float(np.abs(got - morphkit.PhysicalBlend(V0, [V1], F_b).solve(0.8)).max()) / diag(V0)
+check(cyl["morphkit_showing"] == "preview", "live mode does not show the preview first")
+err = float(np.abs(result_key() - ref_blend.predict(0.8)).max()) / diag(V0)
+check(err < 1e-6, f"the live preview differs from the predictor by {err}")
+key.value = 0.9  # moves on while 0.8 is being solved
+bpy.context.view_layer.update()
+physical._live_handler(bpy.context.scene)
+check(physical.finish_live(), "the live solves did not finish")
+check(cyl["morphkit_showing"] == "physical", "the equilibrium did not replace the preview")
+err = float(np.abs(result_key() - ref_blend.solve(0.9)).max()) / diag(V0)
 check(err < 1e-6, f"live update differs by {err}")
+results["live_preview_ms"] = float(cyl["morphkit_preview_ms"])
+# Without the preview every change waits for its solve.
+cyl.morphkit_live_preview = False
+key.value = 0.7
+bpy.context.view_layer.update()
+physical._live_handler(bpy.context.scene)
+check(cyl["morphkit_showing"] == "physical", "the synchronous live update shows a preview")
+err = float(np.abs(result_key() - ref_blend.solve(0.7)).max()) / diag(V0)
+check(err < 1e-6, f"synchronous live update differs by {err}")
+cyl.morphkit_live_preview = True
 cyl.morphkit_live = False
 
 # A pull: an Empty parented to the mesh holds a free vertex.
@@ -229,6 +253,19 @@ t = time.perf_counter()
 bpy.ops.morphkit.physical_update()
 results["horse_slider_latency_ms"] = 1e3 * (time.perf_counter() - t)
 results["horse_solve_ms"] = 1e3 * horse["morphkit_last_stats"]["seconds"]
+# Live: the time until the slider shows something (the preview), then the equilibrium.
+horse.morphkit_live = True  # shows the preview for 0.6 and starts its solve
+check(physical.finish_live(), "the horse's live solve did not finish")
+horse.data.shape_keys.key_blocks["horse-05"].value = 0.7
+t = time.perf_counter()
+bpy.context.view_layer.update()
+physical._live_handler(bpy.context.scene)  # (the update's depsgraph handler may have run it)
+check(horse["morphkit_showing"] == "preview", "the horse's slider shows no preview")
+results["horse_live_preview_ms"] = float(horse["morphkit_preview_ms"])
+check(physical.finish_live(), "the horse's live solve did not finish")
+results["horse_live_solved_ms"] = 1e3 * (time.perf_counter() - t)
+check(horse["morphkit_showing"] == "physical", "the horse's live solve was not shown")
+horse.morphkit_live = False
 bpy.data.objects.remove(horse)
 
 # --- Transfer and rig transfer: cat -> dog ----------------------------------------------

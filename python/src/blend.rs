@@ -7,8 +7,8 @@ use crate::errors::{new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
 use morphkit::mesh::ShapeSet;
 use morphkit::springs::{
-    AnchorOptions, AnchorPlacement, BlendOptions, FixedVertices, FrameStats, InteriorMode,
-    InteriorOptions, PhysicalBlend, PointTarget, VolumetricBlend, Weights,
+    AnchorOptions, AnchorPlacement, BlendOptions, BlendPredictor, FixedVertices, FrameStats,
+    InteriorMode, InteriorOptions, PhysicalBlend, PointTarget, VolumetricBlend, Weights,
 };
 use numpy::{PyArray2, PyArray3};
 use pyo3::prelude::*;
@@ -349,6 +349,30 @@ impl PyPhysicalBlend {
         Ok(to_array3(py, &frames, self.vertices))
     }
 
+    /// The shape the solve for `weights` starts from (see :class:`Predictor`), as a new
+    /// `(n, 3)` array: a preview in milliseconds, not the equilibrium.
+    #[pyo3(signature = (weights, *, convex=false))]
+    fn predict<'py>(
+        &self,
+        py: Python<'py>,
+        weights: &Bound<'py, PyAny>,
+        convex: bool,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        self.predictor()?.predict(py, weights, convex)
+    }
+
+    /// A :class:`Predictor` of this blend that can be used while :meth:`solve` runs on
+    /// another thread. Not available with `interior` or `anchor`.
+    fn predictor(&self) -> PyResult<PyPredictor> {
+        match &self.inner {
+            Solver::Surface(b) => Ok(PyPredictor::new(b.predictor(), self.targets)),
+            Solver::Volume(_) => Err(new_err(
+                Kind::Blend,
+                "predictor: not available with interior or anchor",
+            )),
+        }
+    }
+
     /// Statistics of the last solve as a dict (Newton iterations, factorizations, gradient
     /// norm and tolerance, energy, `converged`, clamped springs, unconverged vertices,
     /// seconds), or `None` before the first.
@@ -382,5 +406,47 @@ impl PyPhysicalBlend {
             "PhysicalBlend(vertices={}, targets={})",
             self.vertices, self.targets
         )
+    }
+}
+
+/// The predictor P(w) of a physical blend, on its own: the rotation-aware interpolation of the
+/// shapes that every solve starts from (exact at each shape's one-hot weights; fixed vertices
+/// at their linear blend; no pulls, no obstacles). It costs one prefactored solve, so a UI can
+/// show it while a slider moves and replace it by the equilibrium when that is ready. It
+/// shares the blend's set-up and may be called from any thread, also while the blend solves.
+///
+/// >>> preview = blend.predictor()
+/// >>> X = preview.predict([0.5])
+#[pyclass(name = "Predictor", module = "morphkit", frozen)]
+pub struct PyPredictor {
+    inner: BlendPredictor,
+    targets: usize,
+}
+
+impl PyPredictor {
+    pub fn new(inner: BlendPredictor, targets: usize) -> Self {
+        Self { inner, targets }
+    }
+}
+
+#[pymethods]
+impl PyPredictor {
+    /// The predicted shape for `weights` (as in :meth:`PhysicalBlend.solve`) as a new `(n, 3)`
+    /// array. The GIL is released.
+    #[pyo3(signature = (weights, *, convex=false))]
+    pub fn predict<'py>(
+        &self,
+        py: Python<'py>,
+        weights: &Bound<'py, PyAny>,
+        convex: bool,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let w = self::weights(weights, convex, self.targets)?;
+        let inner = &self.inner;
+        let p = py.detach(|| inner.predict(&w)).py(Kind::Blend)?;
+        Ok(to_array(py, &p))
+    }
+
+    fn __repr__(&self) -> String {
+        format!("Predictor(targets={})", self.targets)
     }
 }

@@ -31,6 +31,7 @@ fn _morphkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(synth::synthesize, m)?)?;
     m.add_class::<synth::PyPartitions>()?;
     m.add_class::<blend::PyPhysicalBlend>()?;
+    m.add_class::<blend::PyPredictor>()?;
     m.add_class::<scene::PyObstacle>()?;
     m.add_class::<scene::PySceneBlend>()?;
     m.add_class::<transfer::PyCorrespondence>()?;

@@ -211,6 +211,12 @@ impl PySceneBlend {
         Ok(out)
     }
 
+    /// A :class:`Predictor` of the blend without obstacles and pulls (a preview that may
+    /// penetrate the obstacles), usable while :meth:`solve` runs on another thread.
+    fn predictor(&self) -> crate::blend::PyPredictor {
+        crate::blend::PyPredictor::new(self.inner.predictor(), self.targets)
+    }
+
     /// The last frame's statistics: `solver` (as :attr:`PhysicalBlend.last_stats`),
     /// `collision` (contacts, rounds, max_penetration, tolerance, resolved, timings) and
     /// `contacts` (vertex, obstacle, position, depth), or `None` before the first solve.

@@ -143,3 +143,34 @@ def test_interior_and_anchor():
     assert 0.9 < vol < 1.1
     with pytest.raises(morphkit.BlendError, match="interior"):
         morphkit.PhysicalBlend(V, [B], F, interior="voxels")
+
+
+def test_predictor_previews_while_the_blend_solves(rig):
+    V, B, F = rig
+    b = morphkit.PhysicalBlend(V, [B], F)
+    d = diag(V)
+    preview = b.predictor()
+    assert isinstance(preview, morphkit.Predictor)
+    assert np.abs(preview.predict(0.0) - V).max() <= 1e-12 * d
+    assert np.abs(b.predict([0.0, 1.0], convex=True) - B).max() <= 1e-12 * d
+    solved = {}
+    t = threading.Thread(target=lambda: solved.setdefault("x", b.solve(0.5)))
+    t.start()
+    previews = [preview.predict(a) for a in (0.1, 0.3, 0.5)]  # while the solve runs
+    t.join()
+    x = solved["x"]
+    assert b.last_stats["newton_iterations"] > 0
+    lin = 0.5 * (V + B)
+    assert np.abs(previews[2] - x).max() < 0.5 * np.abs(lin - x).max()
+    assert np.array_equal(previews[2], preview.predict(0.5))
+    with pytest.raises(morphkit.BlendError, match="weight"):
+        preview.predict([0.5, 0.5])
+
+
+def test_no_predictor_with_an_interior():
+    from conftest import capped_tube
+
+    V, F = capped_tube()
+    b = morphkit.PhysicalBlend(V, [bend(V, 1.5)], F, interior="lattice")
+    with pytest.raises(morphkit.BlendError, match="interior"):
+        b.predictor()

@@ -43,6 +43,9 @@ def test_far_obstacle_changes_nothing(cylinder):
     x = scene.solve(0.7)
     assert scene.last_stats["collision"]["contacts"] == 0
     assert np.abs(x - morphkit.PhysicalBlend(V0, [V1], F).solve(0.7)).max() <= 1e-12 * diag(V0)
+    # The scene's predictor is the plain blend's (no obstacles, no pulls).
+    plain = morphkit.PhysicalBlend(V0, [V1], F).predict(0.7)
+    assert np.array_equal(scene.predictor().predict(0.7), plain)
 
 
 def test_keyed_pull_follows_its_keys():

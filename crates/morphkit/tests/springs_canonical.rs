@@ -149,6 +149,37 @@ fn a_frame_depends_on_its_weights_alone() {
     );
 }
 
+/// The predictor is the start of every solve: exact at the endpoints (so an endpoint solve
+/// takes no iteration), turned rather than cut along the chord in between, and usable from
+/// another thread while the blend it came from solves.
+#[test]
+fn the_predictor_previews_the_solve_and_runs_beside_it() {
+    let s = bent_bar(150.0);
+    let d = bbox_diagonal(s.positions(0));
+    let mut solver = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap();
+    let preview = solver.predictor();
+    for (a, shape) in [(0.0, 0), (1.0, 1)] {
+        let p = solver.predict(&Weights::Alpha(a)).unwrap();
+        assert!(max_dist(&p, s.positions(shape)) <= 1e-12 * d, "alpha {a}");
+    }
+    let w = Weights::Alpha(0.5);
+    let (solved, previewed) = std::thread::scope(|scope| {
+        let h = scope.spawn(|| solver.solve(&w).unwrap());
+        let p = preview.predict(&w).unwrap();
+        (h.join().unwrap(), p)
+    });
+    assert!(solved.stats.converged && solved.stats.newton_iterations > 0);
+    let lin = linear_blend(&s, &w).unwrap();
+    let to_eq = max_dist(&previewed, &solved.positions);
+    let lin_to_eq = max_dist(&lin, &solved.positions);
+    // A 150-degree bend: the chord shrinks the bar, the rotation-aware predictor does not.
+    assert!(
+        to_eq < 0.25 * lin_to_eq,
+        "predictor {to_eq} vs linear {lin_to_eq} from the equilibrium"
+    );
+    assert_eq!(previewed, preview.predict(&w).unwrap(), "deterministic");
+}
+
 /// Consecutive frames of a 36-step sequence move no vertex by more than 4 × the largest
 /// per-step move of the linear blend. Justification: a vertex carried along an arc of angle
 /// θ ≤ π travels at most θ / (2 sin θ/2) ≤ π/2 times its chord, and the equilibrium may move

@@ -6,7 +6,7 @@ use super::obstacle::Obstacle;
 use super::pulls::{Pull, PullKind};
 use super::SceneError;
 use crate::mesh::{bbox_diagonal, Point, ShapeSet};
-use crate::springs::{BlendOptions, FrameStats, PhysicalBlend, Weights};
+use crate::springs::{BlendOptions, BlendPredictor, FrameStats, PhysicalBlend, Weights};
 
 /// One blended frame of a scene.
 #[derive(Clone, Debug, PartialEq)]
@@ -141,6 +141,11 @@ impl SceneBlend {
             contacts,
             collision,
         })
+    }
+
+    /// The predictor of the underlying blend (no obstacles, no pulls): a preview for UIs.
+    pub fn predictor(&self) -> BlendPredictor {
+        self.solver.predictor()
     }
 
     /// The underlying physical blend.

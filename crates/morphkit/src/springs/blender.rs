@@ -23,8 +23,38 @@ use std::time::Instant;
 /// vectors as needed (a slider, an animation). Each solve is the canonical equilibrium of its
 /// weights (see the [module docs](super)): it never depends on earlier solves.
 pub struct PhysicalBlend {
-    rig: Rig,
+    rig: Arc<Rig>,
     ws: Workspace,
+}
+
+/// The predictor $P(w)$ of a [`PhysicalBlend`] on its own (see [`PhysicalBlend::predictor`]):
+/// cheap to clone, `Send + Sync`, and usable while the blend it came from is solving on
+/// another thread.
+#[derive(Clone)]
+pub struct BlendPredictor {
+    rig: Arc<Rig>,
+}
+
+impl std::fmt::Debug for BlendPredictor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BlendPredictor")
+            .field("vertices", &self.rig.summary.vertices)
+            .finish()
+    }
+}
+
+impl BlendPredictor {
+    /// The shape every solve for `weights` starts from, in world coordinates (`#V`): the
+    /// rotation-aware interpolation of the shapes (the linear blend with
+    /// [`Predictor::Linear`]), with fixed and kinematic vertices at their linear blend. It
+    /// equals each shape exactly at its one-hot weights and costs one prefactored solve, so it
+    /// can follow a slider while the equilibrium is computed (a preview, not the equilibrium).
+    pub fn predict(&self, weights: &Weights) -> Result<Vec<crate::mesh::Point>, BlendError> {
+        let c = weights.coefficients(self.rig.shapes.len())?;
+        let lin = predictor::linear(&self.rig.shapes, &c);
+        let x = self.rig.start(&c, &lin, None);
+        Ok(predictor::output(&self.rig.constraints, &x, &lin))
+    }
 }
 
 /// Everything that does not change between solves (shared by all threads).
@@ -238,7 +268,7 @@ impl PhysicalBlend {
             projected: vec![0.0; nnz],
         };
         Ok(Self {
-            rig: Rig {
+            rig: Arc::new(Rig {
                 shapes: shapes.clone(),
                 terms,
                 constraints,
@@ -249,7 +279,7 @@ impl PhysicalBlend {
                 rotation,
                 is_fixed,
                 summary,
-            },
+            }),
             ws,
         })
     }
@@ -281,6 +311,20 @@ impl PhysicalBlend {
     /// The absolute gradient tolerance of a converged solve.
     pub fn tolerance(&self) -> f64 {
         self.rig.tolerance
+    }
+
+    /// The predictor $P(w)$ that the solve for `weights` starts from (see
+    /// [`BlendPredictor::predict`]).
+    pub fn predict(&self, weights: &Weights) -> Result<Vec<crate::mesh::Point>, BlendError> {
+        self.predictor().predict(weights)
+    }
+
+    /// A handle on the predictor that does not borrow the blend: a UI can show
+    /// [`BlendPredictor::predict`] while a thread solves the equilibrium.
+    pub fn predictor(&self) -> BlendPredictor {
+        BlendPredictor {
+            rig: Arc::clone(&self.rig),
+        }
     }
 
     /// The canonical equilibrium for `weights`.
@@ -364,6 +408,31 @@ impl PhysicalBlend {
 }
 
 impl Rig {
+    /// Where a solve starts, in solver coordinates: `start_from` (with fixed vertices at
+    /// their linear blend) when given, else the predictor $P(c)$.
+    fn start(
+        &self,
+        c: &[f64],
+        lin: &[crate::mesh::Point],
+        start_from: Option<&[crate::mesh::Point]>,
+    ) -> Vec<f64> {
+        let predicted = match (start_from, &self.rotation) {
+            (None, Some(r)) => r.predict(c, lin, &self.is_fixed),
+            _ => None,
+        };
+        let mut x = predictor::predict(
+            &self.constraints,
+            start_from.or(predicted.as_deref()).unwrap_or(lin),
+        );
+        if start_from.is_some() {
+            for &v in &self.constraints.fixed {
+                let v = v as usize;
+                x[3 * v..3 * v + 3].copy_from_slice(&lin[v]);
+            }
+        }
+        x
+    }
+
     fn check_targets(&self, targets: &[PointTarget]) -> Result<(), BlendError> {
         let n = self.shapes.num_vertices();
         for t in targets {
@@ -419,20 +488,7 @@ impl Rig {
             params.push(TermParameters::default());
         }
         let lin = predictor::linear(&self.shapes, &c);
-        let predicted = match (start_from, &self.rotation) {
-            (None, Some(r)) => r.predict(&c, &lin, &self.is_fixed),
-            _ => None,
-        };
-        let mut x = predictor::predict(
-            &self.constraints,
-            start_from.or(predicted.as_deref()).unwrap_or(&lin),
-        );
-        if start_from.is_some() {
-            for &v in &self.constraints.fixed {
-                let v = v as usize;
-                x[3 * v..3 * v + 3].copy_from_slice(&lin[v]);
-            }
-        }
+        let mut x = self.start(&c, &lin, start_from);
         let prob = Problem {
             terms: &terms,
             params: &params,
