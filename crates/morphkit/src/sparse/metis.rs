@@ -2,6 +2,13 @@
 //! Apache-2.0), for the graph of a sparse symmetric matrix.
 
 use super::SolveError;
+use std::sync::Mutex;
+
+/// METIS draws from one process-wide random generator (GKlib's `mt` state, reseeded with 4321
+/// at the start of every call): two calls at once interleave their draws and give orderings
+/// that depend on the timing of threads, hence factors that round differently. One call at a
+/// time keeps every ordering a function of its graph alone.
+static METIS_LOCK: Mutex<()> = Mutex::new(());
 
 /// Nested-dissection ordering of an undirected graph given as adjacency lists (`adj[v]` the
 /// neighbours of `v`; self-loops and duplicates are ignored). Returns `perm` with `perm[k]`
@@ -41,6 +48,7 @@ pub fn nested_dissection(adj: &[Vec<usize>]) -> Result<Vec<usize>, SolveError> {
     // SAFETY: every array has the length METIS documents for NodeND (xadj n+1, adjncy
     // xadj[n], options METIS_NOPTIONS, perm and iperm n); METIS reads the inputs and writes
     // only perm and iperm. No vertex weights are passed (null).
+    let _one_at_a_time = METIS_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let status = unsafe {
         metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
         metis_sys::METIS_NodeND(
@@ -97,5 +105,43 @@ mod tests {
             .map(|(x, y)| (x - y).abs())
             .fold(0.0, f64::max);
         assert!(d < 1e-10);
+    }
+
+    /// Orderings computed on several threads at once equal the one computed alone (METIS's
+    /// generator is process-wide; without the lock they differ from run to run).
+    #[test]
+    fn concurrent_orderings_equal_the_sequential_one() {
+        let graphs: Vec<Vec<Vec<usize>>> = (0..3)
+            .map(|g| {
+                let n = 3000 + 500 * g;
+                let mut adj = vec![Vec::new(); n];
+                for &(i, j, _) in &random_spd(n, 40 + g as u64) {
+                    if i != j {
+                        adj[i].push(j);
+                    }
+                }
+                adj
+            })
+            .collect();
+        let alone: Vec<Vec<usize>> = graphs
+            .iter()
+            .map(|a| nested_dissection(a).unwrap())
+            .collect();
+        std::thread::scope(|s| {
+            let handles: Vec<_> = (0..6)
+                .map(|t| {
+                    let (graphs, alone) = (&graphs, &alone);
+                    s.spawn(move || {
+                        for r in 0..4 {
+                            let g = (t + r) % graphs.len();
+                            assert_eq!(nested_dissection(&graphs[g]).unwrap(), alone[g]);
+                        }
+                    })
+                })
+                .collect();
+            for h in handles {
+                h.join().unwrap();
+            }
+        });
     }
 }

@@ -20,7 +20,7 @@ mod dirichlet;
 mod matrix;
 pub mod metis;
 
-pub use cholesky::{Cholesky, Ordering, SymmetricPattern};
+pub use cholesky::{Cholesky, Ordering, Precision, SymmetricPattern};
 pub use dirichlet::Dirichlet;
 pub use matrix::SparseMatrix;
 

@@ -236,7 +236,8 @@ impl PhysicalBlend {
             FillOrdering::NestedDissection => Some(vertex_nested_dissection(&block_pattern)?),
             FillOrdering::Amd => None,
         };
-        summary.predicted_bytes = predicted_bytes(&block_pattern, vertex_order.as_deref())?;
+        summary.predicted_bytes =
+            predicted_bytes(&block_pattern, vertex_order.as_deref(), o.factor_precision)?;
         if summary.predicted_bytes > o.max_memory_bytes {
             return Err(BlendError::TooLarge {
                 vertices: n,
@@ -257,16 +258,11 @@ impl PhysicalBlend {
             Some(order) => Ordering::Custom(expand_vertex_order(order, &system.dof_index)),
             None => Ordering::Amd,
         };
-        let chol = system.analyze(ordering)?;
+        let chol = system.analyze(ordering, o.factor_precision)?;
         summary.free_dofs = system.num_free();
         summary.factor_nnz = chol.factor_nnz();
         let nnz = system.pattern.nnz();
-        let ws = Workspace {
-            chol,
-            blocks: BlockHessian::zeros(block_pattern),
-            exact: vec![0.0; nnz],
-            projected: vec![0.0; nnz],
-        };
+        let ws = Workspace::new(chol, BlockHessian::zeros(block_pattern), nnz);
         Ok(Self {
             rig: Arc::new(Rig {
                 shapes: shapes.clone(),
@@ -363,12 +359,11 @@ impl PhysicalBlend {
         let mut workspaces = Vec::with_capacity(threads - 1);
         for _ in 1..threads {
             match self.ws.chol.share_symbolic() {
-                Ok(chol) => workspaces.push(Workspace {
+                Ok(chol) => workspaces.push(Workspace::new(
                     chol,
-                    blocks: self.ws.blocks.clone(),
-                    exact: self.ws.exact.clone(),
-                    projected: self.ws.projected.clone(),
-                }),
+                    self.ws.blocks.clone(),
+                    self.ws.exact.len(),
+                )),
                 Err(_) => break, // fewer threads when memory is short
             }
         }

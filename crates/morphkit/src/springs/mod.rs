@@ -75,7 +75,8 @@ pub use interior::{
 };
 pub use metrics::{blend_metrics, fold_metrics, linear_blend, BlendMetrics, FoldMetrics};
 pub use options::{
-    BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, Predictor, RigSummary,
+    BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, Precision, Predictor,
+    RigSummary,
 };
 pub use spring_set::{Spring, SpringKind, SpringOptions, SpringSet, StiffnessRule};
 pub use terms::{HingeOptions, PointTarget};

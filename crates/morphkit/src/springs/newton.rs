@@ -19,16 +19,45 @@ use super::steihaug::{steihaug, StopRule, Termination};
 use super::system::FreeSystem;
 use super::terms::{total_gradient, BlockHessian, EnergyTerm, HessianKind, TermParameters};
 use super::BlendError;
-use crate::sparse::{Cholesky, SolveError};
+use crate::sparse::{Cholesky, Precision, SolveError};
 
 /// Per-thread buffers of a solve: numeric factor, block values, scalar values.
 pub(crate) struct Workspace {
+    /// The factor in the rig's [`Precision`](crate::sparse::Precision).
     pub chol: Cholesky,
+    /// A double-precision factor for the matrices whose single-precision factorization fails
+    /// (allocated on first need; used until the end of that solve only, so that every solve
+    /// starts alike).
+    pub double: Option<Cholesky>,
+    /// Whether the current solve factors with [`Self::double`].
+    pub use_double: bool,
     pub blocks: BlockHessian,
     /// Scalar values of the exact Hessian (the CG operator).
     pub exact: Vec<f64>,
     /// Scalar values of the projected Hessian (the factorization input).
     pub projected: Vec<f64>,
+}
+
+impl Workspace {
+    /// New buffers around a factor.
+    pub fn new(chol: Cholesky, blocks: BlockHessian, nnz: usize) -> Self {
+        Self {
+            chol,
+            double: None,
+            use_double: false,
+            blocks,
+            exact: vec![0.0; nnz],
+            projected: vec![0.0; nnz],
+        }
+    }
+
+    /// The factor the current solve uses.
+    pub fn factor(&mut self) -> &mut Cholesky {
+        match (&mut self.double, self.use_double) {
+            (Some(d), true) => d,
+            _ => &mut self.chol,
+        }
+    }
 }
 
 /// One equilibrium problem: terms with this frame's parameters.
@@ -64,25 +93,59 @@ impl Problem<'_> {
     /// ladder) that makes it positive definite: flat regions have no stiffness normal to their
     /// plane at rest, and round-off can make such a pivot non-positive.
     fn factorize(&self, ws: &mut Workspace, stats: &mut FrameStats) -> Result<(), BlendError> {
+        match self.factorize_with_ladder(ws, stats) {
+            Err(BlendError::Solve(SolveError::NotPositiveDefinite { .. }))
+                if !ws.use_double && ws.chol.precision() == Precision::Single =>
+            {
+                // Beyond single precision: this solve continues with a double factor.
+                if ws.double.is_none() {
+                    ws.double = Some(ws.chol.share_symbolic_with(Precision::Double)?);
+                }
+                ws.use_double = true;
+                self.factorize_with_ladder(ws, stats)
+            }
+            other => other,
+        }
+    }
+
+    /// Factorizes `ws.projected` with [`Workspace::factor`], adding the smallest multiple of
+    /// the identity (from a fixed ladder) that makes it positive definite.
+    fn factorize_with_ladder(
+        &self,
+        ws: &mut Workspace,
+        stats: &mut FrameStats,
+    ) -> Result<(), BlendError> {
         let diag = &self.system.diag_slots;
         let mean =
             diag.iter().map(|&d| ws.projected[d as usize]).sum::<f64>() / diag.len().max(1) as f64;
         let mut shift = 1e-10 * mean;
         let mut added = 0.0;
-        loop {
+        let result = loop {
             for &d in diag {
                 ws.projected[d as usize] += shift - added;
             }
             added = shift;
             stats.factorizations += 1;
-            match ws.chol.factorize(&ws.projected) {
-                Ok(()) => return Ok(()),
+            let values = &ws.projected;
+            let chol = match (&mut ws.double, ws.use_double) {
+                (Some(d), true) => d,
+                _ => &mut ws.chol,
+            };
+            match chol.factorize(values) {
+                Ok(()) => break Ok(()),
                 Err(SolveError::NotPositiveDefinite { .. }) if shift < 1e-2 * mean => {
                     shift *= 100.0;
                 }
-                Err(e) => return Err(e.into()),
+                Err(e) => break Err(e.into()),
+            }
+        };
+        // The ladder's shift is not part of the Hessian: a retry starts from the same values.
+        if result.is_err() {
+            for &d in diag {
+                ws.projected[d as usize] -= added;
             }
         }
+        result
     }
 
     /// Per-vertex residual force over free coordinates: the vertices above the tolerance,
@@ -118,6 +181,7 @@ pub(crate) fn trust_region(
     stats: &mut FrameStats,
 ) -> Result<Vec<f64>, BlendError> {
     let sys = prob.system;
+    ws.use_double = false;
     let n3 = x.len();
     let nfree = sys.num_free();
     let mut g = vec![0.0; n3];
@@ -151,7 +215,7 @@ pub(crate) fn trust_region(
         sys.gather(&g, &mut gfree);
         if radius.is_nan() {
             let mut mg = gfree.clone();
-            ws.chol.solve_one(&mut mg)?;
+            ws.factor().solve_one(&mut mg)?;
             radius = 2.0 * dot(&gfree, &mg).max(0.0).sqrt();
         }
         let stop = StopRule {
@@ -159,7 +223,11 @@ pub(crate) fn trust_region(
             atol_max: 0.1 * prob.tolerance,
             max_iter: (prob.options.cg_iterations.max(1) * extend).min(400),
         };
-        let (chol, exact) = (&mut ws.chol, &ws.exact);
+        let chol = match (&mut ws.double, ws.use_double) {
+            (Some(d), true) => d,
+            _ => &mut ws.chol,
+        };
+        let exact = &ws.exact;
         let mut op = |p: &[f64], out: &mut [f64]| sys.mul(exact, p, out);
         let mut pre = |r: &mut [f64]| chol.solve_one(r).is_ok();
         let result = steihaug(
@@ -270,6 +338,7 @@ pub(crate) fn projected_newton(
     stats: &mut FrameStats,
 ) -> Result<Vec<f64>, BlendError> {
     let sys = prob.system;
+    ws.use_double = false;
     let n3 = x.len();
     let mut g = vec![0.0; n3];
     let mut e = prob.gradient(x, &mut g);
@@ -284,7 +353,7 @@ pub(crate) fn projected_newton(
         prob.factorize(ws, stats)?;
         sys.gather(&g, &mut step);
         step.iter_mut().for_each(|v| *v = -*v);
-        ws.chol.solve_one(&mut step)?;
+        ws.factor().solve_one(&mut step)?;
         let mut slope = 0.0;
         for (k, &i) in sys.dof_index.iter().enumerate() {
             if i != u32::MAX {

@@ -6,7 +6,7 @@
 //! gauge pins, kinematic vertices) are eliminated, so the matrix is `n_free × n_free`.
 
 use super::terms::{BlockHessian, BlockPattern};
-use crate::sparse::{Cholesky, Ordering, SolveError, SymmetricPattern};
+use crate::sparse::{Cholesky, Ordering, Precision, SolveError, SymmetricPattern};
 use std::sync::Arc;
 
 const NONE: u32 = u32::MAX;
@@ -142,8 +142,12 @@ impl FreeSystem {
     }
 
     /// Symbolic analysis of the scalar pattern with `ordering`.
-    pub fn analyze(&self, ordering: Ordering) -> Result<Cholesky, SolveError> {
-        Cholesky::analyze((*self.pattern).clone(), ordering)
+    pub fn analyze(
+        &self,
+        ordering: Ordering,
+        precision: Precision,
+    ) -> Result<Cholesky, SolveError> {
+        Cholesky::analyze_with((*self.pattern).clone(), ordering, precision)
     }
 }
 
@@ -175,11 +179,12 @@ pub(crate) fn expand_vertex_order(order: &[usize], dof_index: &[u32]) -> Vec<usi
 
 /// Predicted bytes of the Newton solve of a system: the scalar pattern and its values (twice:
 /// exact and projected), the block Hessian, and the factor of a vertex-level symbolic analysis
-/// scaled by 9 (every vertex pair is a 3×3 block), per solver workspace. Computed before any
+/// scaled by 9 (every vertex pair is a 3×3 block) in `precision`, per solver workspace. Computed before any
 /// scalar-level allocation, so that a mesh too large for the machine is refused up front.
 pub(crate) fn predicted_bytes(
     block_pattern: &BlockPattern,
     ordering_vertices: Option<&[usize]>,
+    precision: Precision,
 ) -> Result<u64, SolveError> {
     let n = block_pattern.num_vertices();
     let mut entries = Vec::with_capacity(block_pattern.num_pairs());
@@ -198,6 +203,11 @@ pub(crate) fn predicted_bytes(
     let nv = n as u64;
     let scalar_nnz = 9 * pairs + 6 * nv;
     let factor = 9 * l_vertex;
-    // 8 bytes per factor value, 16 per scalar entry (index + value), two value arrays, blocks.
-    Ok(8 * factor + 16 * scalar_nnz + 16 * scalar_nnz + 72 * (nv + pairs))
+    // 8 (or 4) bytes per factor value, 16 per scalar entry (index + value), two value arrays,
+    // the blocks; a single-precision factor also keeps the matrix rounded to f32.
+    let (per_value, rounded) = match precision {
+        Precision::Double => (8, 0),
+        Precision::Single => (4, 4 * scalar_nnz),
+    };
+    Ok(per_value * factor + 16 * scalar_nnz + 16 * scalar_nnz + rounded + 72 * (nv + pairs))
 }
