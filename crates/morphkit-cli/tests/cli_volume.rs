@@ -69,7 +69,8 @@ fn an_open_mesh_with_a_lattice_is_blended_on_its_surface_and_says_so() {
     ]);
     assert!(err.contains("has no interior (open)"), "{err}");
     assert!(out.is_file());
-    let err = fails(&[
+    // Without tetgen on the PATH (an empty PATH for this child only): a clear error.
+    let args = [
         "blend",
         "--base",
         s(&base),
@@ -81,8 +82,25 @@ fn an_open_mesh_with_a_lattice_is_blended_on_its_surface_and_says_so() {
         "tetgen",
         "--out",
         s(&out),
-    ]);
-    assert!(err.contains("tetgen"), "{err}");
+    ];
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_morphkit"))
+        .args(args)
+        .env("PATH", "")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(
+        err.starts_with("error: ")
+            && err.contains("--interior tetgen: no tetgen executable on the PATH")
+            && !err.contains("panicked"),
+        "{err}"
+    );
+    // With tetgen, the open tube is blended on its surface alone and says so.
+    if have_tetgen() {
+        let (_, err) = run_ok(&args);
+        assert!(err.contains("has no interior (open)"), "{err}");
+    }
     let err = fails(&[
         "blend",
         "--base",
@@ -97,4 +115,56 @@ fn an_open_mesh_with_a_lattice_is_blended_on_its_surface_and_says_so() {
         s(&out),
     ]);
     assert!(err.contains("unknown kind"), "{err}");
+}
+
+/// True when `tetgen` is on the PATH; a missing one fails under `MORPHKIT_REQUIRE_TETGEN=1`.
+fn have_tetgen() -> bool {
+    let found = morphkit::springs::interior::tetgen::find_program(None).is_ok();
+    assert!(
+        found || std::env::var("MORPHKIT_REQUIRE_TETGEN").as_deref() != Ok("1"),
+        "MORPHKIT_REQUIRE_TETGEN=1 but no tetgen on the PATH"
+    );
+    if !found {
+        eprintln!("no tetgen on the PATH; skipping the tetgen runs");
+    }
+    found
+}
+
+#[test]
+fn a_tetgen_interior_blend_reports_its_tetrahedra() {
+    if !have_tetgen() {
+        return;
+    }
+    let d = tmp_dir("volume-tetgen");
+    ok(&["demo", "--out", s(&d)]);
+    let (base, target) = (d.join("base.obj"), d.join("target.obj"));
+    let (out, report) = (d.join("frames"), d.join("r.json"));
+    ok(&[
+        "blend",
+        "--base",
+        s(&base),
+        "--target",
+        s(&target),
+        "--frames",
+        "3",
+        "--interior",
+        "tetgen,1.5",
+        "--out",
+        s(&out),
+        "--report",
+        s(&report),
+    ]);
+    assert!(out.join("frame_0002.obj").is_file());
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let tets = r["interior"]["tetrahedra"].as_u64().unwrap();
+    assert!(tets > 0, "{r}");
+    for f in r["frames"].as_array().unwrap() {
+        assert_eq!(
+            f["inversions"]["tetrahedra_total"].as_u64(),
+            Some(tets),
+            "{f}"
+        );
+        assert_eq!(f["solver"]["converged"], true);
+    }
 }

@@ -7,7 +7,7 @@ mod common;
 
 use morphkit::geom::{kabsch, slerp};
 use morphkit::mesh::{bbox_diagonal, generate, Point, ShapeSet};
-use morphkit::springs::interior::VolumeResult;
+use morphkit::springs::interior::{tetgen, VolumeResult};
 use morphkit::springs::{
     linear_blend, AnchorOptions, AnchorPlacement, BlendOptions, FixedVertices, InteriorMode,
     InteriorOptions, PhysicalBlend, VolumetricBlend, Weights,
@@ -38,6 +38,14 @@ fn volume(p: &[Point], tris: &[[u32; 3]]) -> f64 {
 fn lattice(density: f64) -> InteriorOptions {
     InteriorOptions {
         mode: InteriorMode::Lattice,
+        density,
+        ..Default::default()
+    }
+}
+
+fn tetgen(density: f64) -> InteriorOptions {
+    InteriorOptions {
+        mode: InteriorMode::Tetgen,
         density,
         ..Default::default()
     }
@@ -201,22 +209,27 @@ fn internal_springs_under_a_large_bend_stay_close_to_surface_springs() {
     );
 }
 
-/// Spot (closed, 829 vertices) with its front half bent 90°, lattice density 0.5 (only 9
-/// interior points, tied to most surface vertices): measured 3.8e-3 against 5.6e-3 for surface
-/// springs and 7.9e-2 for the linear blend. At density 1 (144 points) the gain is small
-/// (5.5e-3), see the README.
-#[test]
-fn internal_springs_keep_volume_of_a_bent_spot() {
-    let Some(f) = common::data_file("generic-meshes/spot_low_resolution.obj.gz") else {
-        return common::skip("internal_springs_keep_volume_of_a_bent_spot");
-    };
+/// Spot (closed, 829 vertices) and its front half bent 90°, when `MORPHKIT_DATA` is set.
+fn bent_spot() -> Option<ShapeSet> {
+    let f = common::data_file("generic-meshes/spot_low_resolution.obj.gz")?;
     let m = morphkit::io::read_mesh(&f).unwrap();
     // Turn the cow's long axis (z) onto x (a rotation about y), then bend its front half 90°.
     let p: Vec<Point> = m.positions.iter().map(|&[x, y, z]| [z, y, -x]).collect();
     let (lo, hi) = morphkit::mesh::bounding_box(&p);
     let len = hi[0] - lo[0];
     let b = generate::bend(&p, lo[0] + 0.45 * len, 0.55 * len, 90f64.to_radians());
-    let s = pair("bent", &p, b, &m.triangles);
+    Some(pair("bent", &p, b, &m.triangles))
+}
+
+/// Spot (closed, 829 vertices) with its front half bent 90°, lattice density 0.5 (only 9
+/// interior points, tied to most surface vertices): measured 3.8e-3 against 5.6e-3 for surface
+/// springs and 7.9e-2 for the linear blend. At density 1 (144 points) the gain is small
+/// (5.5e-3), see the README.
+#[test]
+fn internal_springs_keep_volume_of_a_bent_spot() {
+    let Some(s) = bent_spot() else {
+        return common::skip("internal_springs_keep_volume_of_a_bent_spot");
+    };
     let [lin, surf, int] = volume_deviations(&s, &lattice(0.5));
     eprintln!(
         "spot: relative volume deviation linear {lin:.2e}, surface {surf:.2e}, internal {int:.2e}"
@@ -308,13 +321,15 @@ fn an_open_mesh_gets_no_interior_and_blends_with_surface_springs() {
 #[test]
 fn tetgen_and_bad_options_are_clear_errors() {
     let s = bent_bar(90.0);
-    let t = InteriorOptions {
-        mode: InteriorMode::Tetgen,
-        ..Default::default()
-    };
-    let e = VolumetricBlend::new(&s, &BlendOptions::default(), &t, &AnchorOptions::default())
-        .unwrap_err();
-    assert!(e.to_string().contains("tetgen"), "{e}");
+    // No tetgen in the search path (the process-wide PATH is left alone; the CLI test runs the
+    // binary with an empty PATH).
+    let e = tetgen::find_program(Some(std::ffi::OsStr::new(""))).unwrap_err();
+    assert!(
+        e.to_string().contains(
+            "--interior tetgen: no tetgen executable on the PATH (Debian package 'tetgen'; AGPL"
+        ),
+        "{e}"
+    );
     let e = VolumetricBlend::new(
         &s,
         &BlendOptions::default(),
@@ -333,4 +348,124 @@ fn tetgen_and_bad_options_are_clear_errors() {
     let e =
         VolumetricBlend::new(&s, &BlendOptions::default(), &lattice(1.0), &outside).unwrap_err();
     assert!(e.to_string().contains("not inside"), "{e}");
+}
+
+/// True when `tetgen` is on the PATH. Without it the test is skipped with a note, unless
+/// `MORPHKIT_REQUIRE_TETGEN=1` (as in CI), which makes a missing tetgen a failure.
+fn have_tetgen(test: &str) -> bool {
+    match tetgen::find_program(None) {
+        Ok(_) => true,
+        Err(e) => {
+            assert!(
+                std::env::var("MORPHKIT_REQUIRE_TETGEN").as_deref() != Ok("1"),
+                "{test}: MORPHKIT_REQUIRE_TETGEN=1 but {e}"
+            );
+            eprintln!("{test}: no tetgen on the PATH; skipping");
+            false
+        }
+    }
+}
+
+/// With `--interior tetgen`: exact endpoints (surface and interior), the reverse solve at
+/// α = 1, and no inverted tetrahedron at either endpoint, on the bent and the twisted bar.
+#[test]
+fn tetgen_interior_has_exact_endpoints_and_a_reverse_solved_target() {
+    if !have_tetgen("tetgen_interior_has_exact_endpoints_and_a_reverse_solved_target") {
+        return;
+    }
+    for s in [bent_bar(120.0), twisted_bar(180.0)] {
+        let d = bbox_diagonal(s.positions(0));
+        let n = s.num_vertices();
+        let mut v = volumetric(&s, &tetgen(1.0), &AnchorOptions::default());
+        let rep = v.report().clone();
+        assert!(rep.interior_vertices > 0 && rep.tetrahedra > 0, "{rep:?}");
+        assert!(rep.skipped.is_empty(), "{rep:?}");
+        assert_eq!(v.tetrahedra().len(), rep.tetrahedra);
+        assert!(rep.reverse_iterations[0] > 0, "{rep:?}");
+        for (alpha, shape) in [(0.0, 0), (1.0, 1)] {
+            let r = v.solve(&Weights::Alpha(alpha)).unwrap();
+            assert!(r.stats.converged, "{:?}", r.stats);
+            assert!(max_dist(&r.positions, s.positions(shape)) <= 1e-6 * d);
+            // At α = 1 the interior is the reverse-solved one.
+            let ext = &v.extended_shapes().positions(shape)[n..];
+            assert!(max_dist(&r.extra, ext) <= 1e-6 * d);
+            assert_eq!(
+                r.inversions.tetrahedra, 0,
+                "α = {alpha}: {:?}",
+                r.inversions
+            );
+            assert_eq!(r.inversions.tetrahedra_total, rep.tetrahedra);
+        }
+        // The reverse solve moved the interior away from the base interior.
+        let (e0, e1) = (
+            v.extended_shapes().positions(0),
+            v.extended_shapes().positions(1),
+        );
+        assert!(max_dist(&e1[n..], &e0[n..]) > 0.05 * d);
+    }
+}
+
+/// The 180° twist with a tetgen interior: closer to the interpolated volume than surface
+/// springs alone and than the linear blend, but only a little closer than surface springs
+/// (measured 2.4e-3 against 2.6e-3, linear 0.5, at densities 1 to 4): the tetrahedron edges
+/// are oblique to the cross-sections, and blended lengths of oblique springs are too long
+/// under a twist, just as for the surface's own springs, while the lattice's ties are spokes
+/// within the cross-sections, whose lengths the twist does not change (7e-6).
+#[test]
+fn tetgen_interior_keeps_volume_under_a_large_twist() {
+    if !have_tetgen("tetgen_interior_keeps_volume_under_a_large_twist") {
+        return;
+    }
+    let [lin, surf, int] = volume_deviations(&twisted_bar(180.0), &tetgen(1.0));
+    eprintln!("twist 180°, tetgen: relative volume deviation linear {lin:.2e}, surface {surf:.2e}, internal {int:.2e}");
+    assert!(int <= 0.95 * surf, "internal {int} vs surface {surf}");
+    assert!(int <= 0.01 * lin, "internal {int} vs linear {lin}");
+}
+
+/// Spot bent 90° (as in `internal_springs_keep_volume_of_a_bent_spot`) with a tetgen interior
+/// at density 1 (178 Steiner points): measured 5.0e-3 against 5.6e-3 for surface springs and
+/// 7.9e-2 for the linear blend.
+#[test]
+fn tetgen_interior_keeps_volume_of_a_bent_spot() {
+    let test = "tetgen_interior_keeps_volume_of_a_bent_spot";
+    if !have_tetgen(test) {
+        return;
+    }
+    let Some(s) = bent_spot() else {
+        return common::skip(test);
+    };
+    let [lin, surf, int] = volume_deviations(&s, &tetgen(1.0));
+    eprintln!("spot, tetgen: relative volume deviation linear {lin:.2e}, surface {surf:.2e}, internal {int:.2e}");
+    assert!(int <= 0.95 * surf, "internal {int} vs surface {surf}");
+    assert!(int <= 0.1 * lin, "internal {int} vs linear {lin}");
+}
+
+#[test]
+fn tetgen_interior_is_deterministic_and_follows_the_density() {
+    if !have_tetgen("tetgen_interior_is_deterministic_and_follows_the_density") {
+        return;
+    }
+    let s = bent_bar(90.0);
+    let a = volumetric(&s, &tetgen(1.5), &AnchorOptions::default());
+    let b = volumetric(&s, &tetgen(1.5), &AnchorOptions::default());
+    assert_eq!(a.tetrahedra(), b.tetrahedra());
+    for k in 0..2 {
+        assert_eq!(
+            a.extended_shapes().positions(k),
+            b.extended_shapes().positions(k)
+        );
+    }
+    let (ra, rb) = (a.report(), b.report());
+    assert_eq!(
+        (ra.interior_vertices, ra.internal_springs),
+        (rb.interior_vertices, rb.internal_springs)
+    );
+    // A higher density gives more interior points.
+    let c = volumetric(&s, &tetgen(3.0), &AnchorOptions::default());
+    assert!(
+        c.report().interior_vertices > ra.interior_vertices,
+        "{} vs {}",
+        c.report().interior_vertices,
+        ra.interior_vertices
+    );
 }

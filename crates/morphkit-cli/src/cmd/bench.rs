@@ -20,7 +20,8 @@ use std::time::Instant;
 )]
 pub struct BenchArgs {
     /// Which suite to run: springs, transfer, rig (blendshape rig transfer), memory, synth,
-    /// scene (collisions), volume (internal springs), or all (springs, transfer, rig, synth).
+    /// scene (collisions), volume (internal springs: lattice, and tetgen when on the PATH), or
+    /// all (springs, transfer, rig, synth).
     #[arg(long, default_value = "all")]
     suite: String,
     /// Directory of the real test meshes (defaults to $MORPHKIT_DATA when set).

@@ -3,7 +3,10 @@
 //! the paper's Table I (Man, Horse, Hand), each with both fill-reducing orderings.
 //!
 //! The meshes are closed tubes bent by 90° whose surface resolution is chosen so that surface
-//! plus BCC-lattice interior (density 1) reaches the target count.
+//! plus BCC-lattice interior (density 1) reaches the target count. When `tetgen` is on the
+//! PATH, each tube is also blended with a `tetgen` interior (density 1, METIS ordering); its
+//! total differs from the lattice's. Every row also gives the relative volume deviation at
+//! α = 0.5.
 
 use morphkit::mesh::{generate, ShapeSet};
 use morphkit::springs::interior::lattice;
@@ -46,68 +49,131 @@ fn tube_with_total(total: usize, o: &InteriorOptions) -> ShapeSet {
     tube(surface)
 }
 
-/// Times the volumetric suite and prints one row per mesh and ordering.
+/// Enclosed volume of the surface `p`.
+fn enclosed(p: &[morphkit::mesh::Point], tris: &[[u32; 3]]) -> f64 {
+    tris.iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| p[i as usize]);
+            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                + a[2] * (b[0] * c[1] - b[1] * c[0]))
+                / 6.0
+        })
+        .sum()
+}
+
+/// One row: set-up, `steps` timed steps, and the relative volume deviation at α = 0.5 from
+/// $(V_0 + V_1)/2$ (one more, untimed, solve).
+fn row(
+    name: &str,
+    kind: &str,
+    shapes: &ShapeSet,
+    interior: &InteriorOptions,
+    ordering: FillOrdering,
+    steps: usize,
+    threads: usize,
+) -> anyhow::Result<serde_json::Value> {
+    let opts = BlendOptions {
+        ordering,
+        ..Default::default()
+    };
+    let t0 = Instant::now();
+    let mut v = VolumetricBlend::new(shapes, &opts, interior, &AnchorOptions::default())?;
+    let setup = t0.elapsed().as_secs_f64();
+    let w: Vec<Weights> = (0..steps)
+        .map(|k| Weights::Alpha(k as f64 / (steps.max(2) - 1) as f64))
+        .collect();
+    let t1 = Instant::now();
+    let (mut iters, mut converged) = (0, true);
+    for r in v.solve_many(&w, threads) {
+        let r = r?;
+        iters += r.stats.newton_iterations;
+        converged &= r.stats.converged;
+    }
+    let per_step = t1.elapsed().as_secs_f64() / steps as f64;
+    let half = v.solve(&Weights::Alpha(0.5))?;
+    let t = shapes.triangles();
+    let mid = 0.5 * (enclosed(shapes.positions(0), t) + enclosed(shapes.positions(1), t));
+    let deviation = (enclosed(&half.positions, t) - mid).abs() / mid.abs();
+    let rep = v.report();
+    let n_total = rep.surface_vertices + rep.interior_vertices;
+    let springs = v.physical().summary().springs + rep.internal_springs;
+    let order = match ordering {
+        FillOrdering::Amd => "amd",
+        FillOrdering::NestedDissection => "metis",
+    };
+    println!(
+        "{:<14} {:>8} {:>6} {:>7} {:>7} {:>8} {:>9.0} {:>10.1} {:>7.2} {:>9} {:>9.2e}",
+        name,
+        kind,
+        order,
+        rep.surface_vertices,
+        n_total,
+        springs,
+        setup * 1e3,
+        per_step * 1e3,
+        iters as f64 / steps as f64,
+        converged,
+        deviation
+    );
+    Ok(json!({
+        "mesh": name, "interior": kind, "ordering": order,
+        "surface_vertices": rep.surface_vertices, "total_vertices": n_total,
+        "springs": springs, "tetrahedra": rep.tetrahedra,
+        "factor_nnz": v.physical().factor_nnz(),
+        "setup_ms": setup * 1e3, "ms_per_step": per_step * 1e3,
+        "newton_iterations_per_step": iters as f64 / steps as f64,
+        "all_converged": converged, "threads": threads,
+        "volume_deviation_half": deviation,
+    }))
+}
+
+/// Times the volumetric suite and prints one row per mesh and ordering, plus one row with a
+/// `tetgen` interior (density 1, METIS) on the same tube when `tetgen` is on the PATH.
 pub fn run_volume_bench(steps: usize, threads: usize) -> anyhow::Result<serde_json::Value> {
     let interior = InteriorOptions {
         mode: InteriorMode::Lattice,
         ..Default::default()
     };
-    println!("physical blend with internal springs (BCC lattice, density 1), {steps} steps, {threads} thread(s)");
+    let tetgen = InteriorOptions {
+        mode: InteriorMode::Tetgen,
+        ..Default::default()
+    };
+    let have_tetgen = morphkit::springs::interior::tetgen::find_program(None).is_ok();
+    println!("physical blend with internal springs (BCC lattice, density 1; tetgen rows: tetgen, density 1{}), {steps} steps, {threads} thread(s); vol dev: |V - (V0 + V1)/2| / ((V0 + V1)/2) at alpha = 0.5",
+        if have_tetgen { "" } else { ", skipped: no tetgen on the PATH" });
     println!(
-        "{:<14} {:>6} {:>7} {:>7} {:>8} {:>9} {:>10} {:>7} {:>9}",
-        "mesh", "order", "surface", "total", "springs", "setup ms", "ms/step", "newton", "conv"
+        "{:<14} {:>8} {:>6} {:>7} {:>7} {:>8} {:>9} {:>10} {:>7} {:>9} {:>9}",
+        "mesh",
+        "interior",
+        "order",
+        "surface",
+        "total",
+        "springs",
+        "setup ms",
+        "ms/step",
+        "newton",
+        "conv",
+        "vol dev"
     );
     let mut rows = Vec::new();
     for total in [2_200, 8_500, 18_600] {
         let shapes = tube_with_total(total, &interior);
+        let name = format!("tube-{total}");
         for ordering in [FillOrdering::NestedDissection, FillOrdering::Amd] {
-            let opts = BlendOptions {
-                ordering,
-                ..Default::default()
-            };
-            let t0 = Instant::now();
-            let mut v = VolumetricBlend::new(&shapes, &opts, &interior, &AnchorOptions::default())?;
-            let setup = t0.elapsed().as_secs_f64();
-            let w: Vec<Weights> = (0..steps)
-                .map(|k| Weights::Alpha(k as f64 / (steps.max(2) - 1) as f64))
-                .collect();
-            let t1 = Instant::now();
-            let (mut iters, mut converged) = (0, true);
-            for r in v.solve_many(&w, threads) {
-                let r = r?;
-                iters += r.stats.newton_iterations;
-                converged &= r.stats.converged;
-            }
-            let per_step = t1.elapsed().as_secs_f64() / steps as f64;
-            let rep = v.report();
-            let n_total = rep.surface_vertices + rep.interior_vertices;
-            let springs = v.physical().summary().springs + rep.internal_springs;
-            let name = format!("tube-{total}");
-            let order = match ordering {
-                FillOrdering::Amd => "amd",
-                FillOrdering::NestedDissection => "metis",
-            };
-            println!(
-                "{:<14} {:>6} {:>7} {:>7} {:>8} {:>9.0} {:>10.1} {:>7.2} {:>9}",
-                name,
-                order,
-                rep.surface_vertices,
-                n_total,
-                springs,
-                setup * 1e3,
-                per_step * 1e3,
-                iters as f64 / steps as f64,
-                converged
-            );
-            rows.push(json!({
-                "mesh": name, "ordering": order,
-                "surface_vertices": rep.surface_vertices, "total_vertices": n_total,
-                "springs": springs, "tetrahedra": rep.tetrahedra,
-                "factor_nnz": v.physical().factor_nnz(),
-                "setup_ms": setup * 1e3, "ms_per_step": per_step * 1e3,
-                "newton_iterations_per_step": iters as f64 / steps as f64,
-                "all_converged": converged, "threads": threads,
-            }));
+            rows.push(row(
+                &name, "lattice", &shapes, &interior, ordering, steps, threads,
+            )?);
+        }
+        if have_tetgen {
+            rows.push(row(
+                &name,
+                "tetgen",
+                &shapes,
+                &tetgen,
+                FillOrdering::NestedDissection,
+                steps,
+                threads,
+            )?);
         }
     }
     Ok(json!(rows))

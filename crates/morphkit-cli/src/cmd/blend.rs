@@ -126,7 +126,9 @@ pub struct BlendArgs {
     /// Rigid anchor (Ma et al. Sec. 3.4): `auto`, or `x,y,z[,size]` in base coordinates.
     #[arg(long)]
     pub anchor: Option<String>,
-    /// Interior for volume (Sec. 3.1): `none`, `lattice` or `tetgen`, optionally `,density`.
+    /// Interior for volume (Sec. 3.1): `none`, `lattice` (BCC lattice, spacing 2 mean edges /
+    /// density) or `tetgen` (constrained Delaunay tetrahedralization by an external `tetgen`
+    /// on the PATH, tetrahedra up to a regular one of that edge), optionally `,density`.
     #[arg(long, default_value = "none")]
     pub interior: String,
 }

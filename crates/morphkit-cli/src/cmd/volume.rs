@@ -4,8 +4,11 @@
 //!
 //! - `--interior none|lattice|tetgen[,density]`: `lattice` fills each closed component with a
 //!   BCC lattice (density 1: spacing two mean edges; 2: half that); open components are
-//!   blended with surface springs alone and listed in the report and on stderr. `tetgen` is a
-//!   clear error in this version.
+//!   blended with surface springs alone and listed in the report and on stderr. `tetgen` runs
+//!   an external `tetgen` (Debian package; AGPL, only run as a separate process) on each closed
+//!   component's surface for a constrained Delaunay tetrahedralization (largest tetrahedron a
+//!   regular one of edge 2 mean edges / density; the surface is not split); without `tetgen`
+//!   on the PATH it is a clear error.
 //! - `--anchor auto|x,y,z[,size]`: a small stiff cube inside the base whose vertices are the
 //!   boundary conditions; the result follows its slerp-interpolated rigid motion.
 

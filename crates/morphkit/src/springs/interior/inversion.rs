@@ -2,8 +2,9 @@
 //! a mass–spring system may have several equilibria, and the one found may turn elements
 //! inside out.
 //!
-//! Per frame two counts: lattice tetrahedra whose signed volume is not positive (they are all
-//! positive in the base, see [`lattice`](super::lattice)), and surface triangles whose normal
+//! Per frame two counts: interior tetrahedra (of the lattice or of `tetgen`) whose signed
+//! volume is not positive (they are all positive in the base, see [`lattice`](super::lattice)
+//! and [`tetgen`](super::tetgen)), and surface triangles whose normal
 //! points against the same triangle's normal in the linear blend of the same weights
 //! ($n_t \cdot n_t^{\text{lin}} < 0$; triangles degenerate in the linear blend are not
 //! counted).

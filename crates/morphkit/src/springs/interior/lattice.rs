@@ -50,7 +50,7 @@ pub struct SkippedComponent {
     /// One of its vertices.
     pub example_vertex: u32,
     /// Why: `"open"` (boundary or non-manifold edges), `"not consistently oriented"`, `"too
-    /// thin for the lattice"`, `"inside test unavailable"`.
+    /// thin for the lattice"`, `"inside test unavailable"`, `"tetgen made no tetrahedra"`.
     pub reason: String,
 }
 
@@ -200,11 +200,12 @@ impl Solid {
 pub struct Interior {
     /// Base positions of the interior vertices; vertex `n + k` is `points[k]`.
     pub points: Vec<Point>,
-    /// Internal springs (lattice edges and surface ties) in extended ids, `i < j`.
+    /// Internal springs (lattice edges and surface ties, or tetgen's non-surface tetrahedron
+    /// edges) in extended ids, `i < j`.
     pub springs: Vec<[u32; 2]>,
-    /// Lattice tetrahedra in extended ids, positively oriented in the base.
+    /// Tetrahedra (lattice or tetgen) in extended ids, positively oriented in the base.
     pub tets: Vec<[u32; 4]>,
-    /// Lattice spacing per filled component `(component, h)`.
+    /// Lattice spacing (tetgen: edge of the volume bound) per filled component `(component, h)`.
     pub spacing: Vec<(usize, f64)>,
     /// Components left without interior, and why.
     pub skipped: Vec<SkippedComponent>,

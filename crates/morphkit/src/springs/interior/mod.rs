@@ -11,7 +11,10 @@
 //! - **internal springs** ([`SpringKind::Internal`](super::SpringKind)), stiffness
 //!   $k = k_0 / \bar r$ like every spring (Sec. 3.5): the edges of a body-centred cubic (BCC)
 //!   lattice of interior points of each *closed* component, and ties from each surface vertex to
-//!   its nearest interior points ([`lattice`]);
+//!   its nearest interior points ([`lattice`], the default); or, with
+//!   [`InteriorMode::Tetgen`](super::InteriorMode), the edges of a constrained Delaunay
+//!   tetrahedralization made by an external `tetgen` process, surface kept as it is
+//!   ([`tetgen`]);
 //! - **anchor springs** ([`SpringKind::Anchor`](super::SpringKind)): the anchor's own edges,
 //!   [`AnchorOptions::stiffness`] × $k_0$, and ties from each anchor vertex to the nearest body
 //!   vertices at $k_0$ ([`anchor`]).
@@ -44,7 +47,8 @@
 //!
 //! # Open meshes
 //!
-//! Interior points are placed only in closed, consistently oriented components: the inside
+//! Interior points are placed only in closed, consistently oriented components (by the lattice
+//! and by `tetgen` alike): the inside
 //! test (`parry3d-f64`'s pseudo-normal test on a trimesh built with the `ORIENTED` flag) is not
 //! defined for an open surface. Every other component is blended with surface springs alone
 //! and listed in [`InteriorReport::skipped`] with the reason; nothing fails. An anchor in an
@@ -55,13 +59,15 @@
 //!
 //! The paper optionally inserts vertices to avoid long springs (Sec. 3.1). The lattice makes
 //! that unnecessary: every internal spring is $h$ or $\tfrac{\sqrt 3}{2} h$ long, and surface
-//! ties are at most [`InteriorOptions::tie_radius`] $\cdot h$.
+//! ties are at most [`InteriorOptions::tie_radius`] $\cdot h$. With `tetgen` the volume bound
+//! and the radius–edge bound (`-q1.414`) do the refinement; the surface itself is not split.
 
 pub mod anchor;
 mod inversion;
 pub mod lattice;
 mod options;
 pub mod reverse;
+pub mod tetgen;
 mod volumetric;
 
 pub use anchor::{Anchor, AnchorMotion};
@@ -84,7 +90,8 @@ pub enum InteriorError {
     /// An option is out of range.
     #[error("invalid interior option: {0}")]
     InvalidOption(String),
-    /// `tetgen` was asked for but cannot be used.
+    /// `tetgen` was asked for but cannot be used: not on the `PATH`, it failed (its last output
+    /// lines quoted), the surface intersects itself, or its output cannot be read.
     #[error("--interior tetgen: {0}")]
     Tetgen(String),
     /// The anchor's given position is not inside any closed component.

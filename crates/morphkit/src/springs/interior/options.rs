@@ -10,9 +10,10 @@ pub enum InteriorMode {
     None,
     /// A body-centred cubic lattice inside each closed component (pure Rust).
     Lattice,
-    /// A constrained Delaunay tetrahedralization by an external `tetgen` program (the paper's
-    /// choice; AGPL, so never linked). Not built in this version: asking for it is an error
-    /// naming the reason.
+    /// A constrained Delaunay tetrahedralization of each closed component by an external
+    /// `tetgen` program found on the `PATH` (the paper's choice; AGPL, so only ever run as a
+    /// separate process, never linked), see [`tetgen`](super::tetgen). Without `tetgen` on the
+    /// `PATH` asking for it is an error naming the reason.
     Tetgen,
 }
 
@@ -24,14 +25,17 @@ pub struct InteriorOptions {
     /// Lattice density: the lattice spacing is $h = 2 \bar e / \text{density}$ with $\bar e$
     /// the component's mean surface edge length in the base. Default `1.0` (spacing two
     /// mean edges, so the interior has a few times fewer vertices than the surface of a
-    /// compact shape); `2.0` halves the spacing (8× the interior points).
+    /// compact shape); `2.0` halves the spacing (8× the interior points). For
+    /// [`InteriorMode::Tetgen`] the same length $L = h$ sets the largest tetrahedron volume,
+    /// $L^3 / (6\sqrt2)$ (a regular tetrahedron of edge $L$).
     pub density: f64,
-    /// Interior points closer than `margin · h` to the surface are left out, so that no
+    /// Lattice only: interior points closer than `margin · h` to the surface are left out, so that no
     /// internal spring is a sliver against the surface. Default `0.35`.
     pub margin: f64,
-    /// Each surface vertex is tied to at most this many nearest interior points. Default `4`.
+    /// Lattice only: each surface vertex is tied to at most this many nearest interior points.
+    /// Default `4`.
     pub ties_per_vertex: usize,
-    /// …within `tie_radius · h`; ties whose segment leaves the solid are dropped. Default `2.0`.
+    /// Lattice only: …within `tie_radius · h`; ties whose segment leaves the solid are dropped. Default `2.0`.
     pub tie_radius: f64,
     /// Stiffness multiplier of internal springs relative to $k_0$. Default `1.0` (the paper
     /// uses one $k_0$ for every spring).
@@ -104,7 +108,7 @@ impl InteriorOptions {
             )))
         };
         if !(self.density.is_finite() && self.density > 0.0) {
-            return bad("the lattice density", self.density);
+            return bad("the interior density", self.density);
         }
         if !(self.margin.is_finite() && self.margin >= 0.0) {
             return bad("the margin", self.margin);

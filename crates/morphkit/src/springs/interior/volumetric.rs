@@ -4,6 +4,7 @@
 use super::anchor::{self, apply_inverse, AnchorMotion};
 use super::lattice::{self, Interior, SkippedComponent};
 use super::reverse::{self, Neighbourhoods};
+use super::tetgen;
 use super::{
     count_inversions, AnchorOptions, InteriorError, InteriorMode, InteriorOptions, Inversions,
 };
@@ -21,17 +22,19 @@ use std::time::Instant;
 pub struct InteriorReport {
     /// Surface vertices.
     pub surface_vertices: usize,
-    /// Interior (lattice) vertices.
+    /// Interior vertices (lattice points or tetgen's Steiner points).
     pub interior_vertices: usize,
     /// Anchor vertices (0 or 8).
     pub anchor_vertices: usize,
-    /// Internal springs (lattice edges and surface ties).
+    /// Internal springs (lattice edges and surface ties, or tetgen's tetrahedron edges that
+    /// are not surface edges).
     pub internal_springs: usize,
     /// Anchor springs (its edges and ties).
     pub anchor_springs: usize,
-    /// Lattice tetrahedra.
+    /// Interior tetrahedra (lattice or tetgen).
     pub tetrahedra: usize,
-    /// Lattice spacing per filled component `(component, h)`.
+    /// Lattice spacing, or tetgen's edge length $L$ of the volume bound, per filled component
+    /// `(component, h)`.
     pub spacing: Vec<(usize, f64)>,
     /// Components without interior and why (open meshes: every component).
     pub skipped: Vec<SkippedComponent>,
@@ -39,7 +42,7 @@ pub struct InteriorReport {
     pub anchor: Option<(Point, f64)>,
     /// Newton iterations of each target's reverse solve.
     pub reverse_iterations: Vec<usize>,
-    /// Seconds spent building (lattice, reverse solves, symbolic analysis).
+    /// Seconds spent building (interior, reverse solves, symbolic analysis).
     pub setup_seconds: f64,
 }
 
@@ -76,16 +79,6 @@ impl std::fmt::Debug for VolumetricBlend {
     }
 }
 
-fn check_tetgen() -> Result<(), InteriorError> {
-    let found = std::env::var_os("PATH")
-        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join("tetgen").is_file()));
-    Err(InteriorError::Tetgen(if found {
-        "a tetgen executable is on the PATH, but driving it is not built in this version; use --interior lattice".into()
-    } else {
-        "no tetgen executable on the PATH (Debian package 'tetgen'; AGPL, run only as a separate program); use --interior lattice".into()
-    }))
-}
-
 impl VolumetricBlend {
     /// Builds the interior and the anchor in the base, places them in every target by the
     /// reverse solve, and sets up the blend of the extended shape set.
@@ -103,16 +96,16 @@ impl VolumetricBlend {
         let t0 = Instant::now();
         interior.check()?;
         anchor.check()?;
-        if interior.mode == InteriorMode::Tetgen {
-            check_tetgen()?;
-        }
         let n = shapes.num_vertices();
         let base = shapes.positions(0);
         let k0 = options.springs.k0;
         let (solids, skipped) = lattice::solids(base, shapes.triangles());
         let inner = match interior.mode {
             InteriorMode::Lattice => lattice::build_in(base, &solids, skipped, interior),
-            _ => Interior::default(),
+            InteriorMode::Tetgen => {
+                tetgen::build_in(base, shapes.triangles(), &solids, skipped, interior)?
+            }
+            InteriorMode::None => Interior::default(),
         };
         let mut body = base.to_vec();
         body.extend_from_slice(&inner.points);
@@ -236,7 +229,7 @@ impl VolumetricBlend {
     pub fn extended_shapes(&self) -> &ShapeSet {
         &self.extended
     }
-    /// The lattice tetrahedra (extended ids).
+    /// The interior tetrahedra (extended ids), positively oriented in the base.
     pub fn tetrahedra(&self) -> &[[u32; 4]] {
         &self.tets
     }
