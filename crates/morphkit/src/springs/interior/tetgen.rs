@@ -67,7 +67,6 @@ const TETGEN_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(600);
 
 /// The `tetgen` executable in `search_path` (a `PATH`-style list; `None`: the process's
 /// `PATH`), or the error saying it is missing.
-
 pub fn find_program(search_path: Option<&OsStr>) -> Result<PathBuf, InteriorError> {
     let from_env: Option<OsString> = std::env::var_os("PATH");
     let path = match search_path {
