@@ -1,5 +1,6 @@
 //! Issue 9: the quality metrics in `correspond --report` and `transfer --report`, and the
-//! `--refine` / `--one-way` / `--combine` flags, run as the built binary on generated tubes.
+//! `--refine` / `--one-way` / `--combine` / `--local-stretch` flags, run as the built binary on
+//! generated tubes.
 
 mod common;
 use common::*;
@@ -107,6 +108,32 @@ fn reports_carry_quality_and_cycle_consistency() {
     assert!(mean > 0.0 && mean <= max && max < 0.1, "{c}");
     assert_eq!(c["frame_mean_relative"].as_array().unwrap().len(), 2);
     assert_eq!(r["sharp_folds_per_frame"].as_array().unwrap().len(), 2);
+    // The local-stretch frame (with the refinement and area weights) runs and reports too.
+    let local = d.join("transfer-local.json");
+    ok(&[
+        "transfer",
+        "--source-ref",
+        s(&src),
+        "--source",
+        &format!("{}/frame-*.obj", d.display()),
+        "--target",
+        s(&tgt),
+        "--markers",
+        s(&markers),
+        "--out",
+        s(&d.join("out-local")),
+        "--report",
+        s(&local),
+        "--local-stretch",
+        "--refine",
+        "--area-weighted",
+    ]);
+    let c = &json(&local)["cycle_consistency"];
+    let (lmean, lmax) = (
+        c["mean_relative"].as_f64().unwrap(),
+        c["max_relative"].as_f64().unwrap(),
+    );
+    assert!(lmean > 0.0 && lmean <= lmax && lmax < 0.1, "{c}");
     let e = fails(&[
         "transfer",
         "--source-ref",

@@ -9,12 +9,17 @@
 //!   and the largest cycle error and the sharp folds, and horse → camel correspondence with it
 //!   must stay within 2 s (release build).
 //!
+//! - the local-stretch gradient frame (`GradientFrame::LocalStretch`, opt-in) must lower the
+//!   mean cycle error by at least 15 %, and with the refinement and area-weighted solves by at
+//!   least 25 % on horse ↔ camel and 20 % on cat ↔ dog, with no more sharp folds than the
+//!   baseline; a self-transfer in that frame must be exact.
+//!
 //! Measured (release, 2 shared cores): horse ↔ camel mean 0.994 % (baseline) → 0.990 %
-//! (default) → 0.964 % (refined), max 5.49 % → 5.34 % → 4.76 %; cat ↔ dog mean 2.110 % →
-//! 2.074 % → 2.003 %, max 10.8 % → 10.6 % → 9.0 %. The issue's target of a 25 % lower mean is
-//! **not** reached: the round trip's error is dominated by what the least-squares solve
-//! cannot fit on the other mesh, which no variant of the matching changed by more than 7 %
-//! (`explore`, ignored, runs any variant: `EXPLORE="refine,two_way,combine,radius,max"`).
+//! (default) → 0.964 % (refined) → 0.799 % (local stretch) → 0.741 % (refined, local stretch,
+//! area: −25.5 %); cat ↔ dog 2.110 % → 2.074 % → 2.003 % → 1.713 % → 1.667 % (−21.0 %). The
+//! issue's target of a 25 % lower mean on both pairs is **not** reached on cat ↔ dog; see
+//! README and `examples/cycle_diagnosis.rs` for where the error comes from (`explore`,
+//! ignored, runs variants: `EXPLORE="refine,two_way,combine,radius,max"`).
 
 mod common;
 
@@ -22,7 +27,7 @@ use morphkit::io::{read_mesh, read_shape_set};
 use morphkit::mesh::{Point, TriMesh};
 use morphkit::transfer::{
     correspond, correspondence_quality, cycle_consistency, CorrespondenceOptions, GradientCombine,
-    Markers, RefineOptions, TransferOptions,
+    GradientFrame, Markers, RefineOptions, TransferOptions, TriangleWeighting,
 };
 use std::path::PathBuf;
 use std::time::Instant;
@@ -47,17 +52,6 @@ struct Measured {
     correspond_s: f64,
     normal_pass: f64,
     coverage: f64,
-}
-
-fn measure(p: &Pair, copts: &CorrespondenceOptions, combine: GradientCombine) -> Measured {
-    measure_with(
-        p,
-        copts,
-        TransferOptions {
-            combine,
-            ..Default::default()
-        },
-    )
 }
 
 fn measure_with(p: &Pair, copts: &CorrespondenceOptions, topts: TransferOptions) -> Measured {
@@ -88,51 +82,72 @@ fn measure_with(p: &Pair, copts: &CorrespondenceOptions, topts: TransferOptions)
     m
 }
 
-fn baseline() -> (CorrespondenceOptions, GradientCombine) {
+/// The one-stage correspondence of before issue 9: one-way matching, `--combine mean`,
+/// gradients carried over in the world frame.
+fn baseline() -> (CorrespondenceOptions, TransferOptions) {
     (
         CorrespondenceOptions {
             refine: None,
             two_way: false,
             ..Default::default()
         },
-        GradientCombine::Mean,
+        TransferOptions {
+            combine: GradientCombine::Mean,
+            frame: GradientFrame::World,
+            ..Default::default()
+        },
     )
 }
 
-fn check(p: &Pair, time_budget: Option<f64>) {
-    let (bo, bc) = baseline();
-    let base = measure(p, &bo, bc);
-    let new = measure(
-        p,
-        &CorrespondenceOptions::default(),
-        GradientCombine::default(),
-    );
+fn local() -> TransferOptions {
+    TransferOptions {
+        frame: GradientFrame::LocalStretch,
+        ..Default::default()
+    }
+}
+
+fn local_area() -> TransferOptions {
+    let mut t = local();
+    t.solver.weighting = TriangleWeighting::Area;
+    t
+}
+
+/// `best_lower`: the least reduction of the mean cycle error against the baseline that the
+/// best variant (local stretch, refined, area-weighted solves) must reach on this pair.
+fn check(p: &Pair, time_budget: Option<f64>, best_lower: f64) {
+    let (bo, bt) = baseline();
     let refined_opts = CorrespondenceOptions {
         refine: Some(RefineOptions::default()),
         ..Default::default()
     };
-    let refined = measure(p, &refined_opts, GradientCombine::default());
-    eprintln!(
-        "{}: cycle mean {:.5} → {:.5} → {:.5} (refined {:.1} % lower), max {:.4} → {:.4} → {:.4}, \
-         sharp folds {} → {} → {}, flipped {} → {} → {}, correspondence {:.3} s → {:.3} s → {:.3} s",
-        p.name,
-        base.cycle_mean,
-        new.cycle_mean,
-        refined.cycle_mean,
-        100.0 * (1.0 - refined.cycle_mean / base.cycle_mean),
-        base.cycle_max,
-        new.cycle_max,
-        refined.cycle_max,
-        base.folds,
-        new.folds,
-        refined.folds,
-        base.flipped,
-        new.flipped,
-        refined.flipped,
-        base.correspond_s,
-        new.correspond_s,
-        refined.correspond_s
-    );
+    let dflt = CorrespondenceOptions::default();
+    let base = measure_with(p, &bo, bt);
+    let new = measure_with(p, &dflt, TransferOptions::default());
+    let local_only = measure_with(p, &dflt, local());
+    let refined = measure_with(p, &refined_opts, TransferOptions::default());
+    let refined_local = measure_with(p, &refined_opts, local());
+    let best = measure_with(p, &refined_opts, local_area());
+    let lower = |m: &Measured| 100.0 * (1.0 - m.cycle_mean / base.cycle_mean);
+    for (name, m) in [
+        ("baseline", &base),
+        ("default", &new),
+        ("local stretch", &local_only),
+        ("refined", &refined),
+        ("refined, local stretch", &refined_local),
+        ("refined, local stretch, area", &best),
+    ] {
+        eprintln!(
+            "{}: {name:<32} cycle mean {:.4} % ({:+.1} % vs baseline), max {:.3} %, sharp folds {}, \
+             flipped {}, correspondence {:.3} s",
+            p.name,
+            100.0 * m.cycle_mean,
+            -lower(m),
+            100.0 * m.cycle_max,
+            m.folds,
+            m.flipped,
+            m.correspond_s
+        );
+    }
     assert!(
         new.cycle_mean <= 1.01 * base.cycle_mean,
         "{}: default mean cycle error {:.5} is worse than the baseline {:.5}",
@@ -151,6 +166,23 @@ fn check(p: &Pair, time_budget: Option<f64>) {
         p.name
     );
     assert!(refined.folds <= base.folds, "{refined:?} vs {base:?}");
+    // The local-stretch frame lowers the mean cycle error by 17–20 % on its own (but folds
+    // more), and with the refinement and area weights by 21–25 % with no more sharp folds.
+    assert!(
+        lower(&local_only) >= 15.0,
+        "{}: local stretch lowers the mean cycle error by {:.1} % only",
+        p.name,
+        lower(&local_only)
+    );
+    assert!(
+        lower(&best) >= best_lower && best.folds <= base.folds,
+        "{}: refined + local stretch + area: {:.1} % lower (want ≥ {best_lower} %), {} sharp folds \
+         (baseline {})",
+        p.name,
+        lower(&best),
+        best.folds,
+        base.folds
+    );
     if let Some(t) = time_budget {
         if !cfg!(debug_assertions) {
             assert!(
@@ -186,7 +218,7 @@ fn horse_camel_cycle_consistency_improves() {
         b: read_mesh(&c).unwrap(),
         markers: Markers::read(&mk).unwrap(),
     };
-    check(&p, Some(2.0));
+    check(&p, Some(2.0), 25.0);
 }
 
 #[test]
@@ -212,13 +244,13 @@ fn cat_dog_cycle_consistency_improves() {
         b: read_mesh(&dog).unwrap(),
         markers: Markers::read(&mk).unwrap(),
     };
-    check(&p, None);
+    check(&p, None, 20.0);
 }
 
-/// Measures any variants on both pairs, for tuning: `EXPLORE="r,w,c,radius,max[,wc/wc/…[,wi[,a]]];…"`
+/// Measures any variants on both pairs, for tuning: `EXPLORE="r,w,c,radius,max[,wc/wc/…[,wi[,a[,l]]]];…"`
 /// with r = 1 to refine, w = 1 for two-way, c = m(ean), n(earest) or i(nverse distance), the
-/// radius factor, the most matches, the closest-point weights, the identity weight, and `a`
-/// for area-weighted solves.
+/// radius factor, the most matches, the closest-point weights, the identity weight, `a`
+/// for area-weighted solves and `l` for the local-stretch frame.
 #[test]
 #[ignore = "a tuning tool, not a check: it prints measurements of the EXPLORE variants and asserts nothing; run it with --ignored"]
 fn explore() {
@@ -274,6 +306,9 @@ fn explore() {
         if f.get(7) == Some(&"a") {
             t.solver.weighting = morphkit::transfer::TriangleWeighting::Area;
         }
+        if f.get(8) == Some(&"l") {
+            t.frame = GradientFrame::LocalStretch;
+        }
         eprintln!("== {item}");
         measure_with(&hp, &o, t);
     }
@@ -302,13 +337,14 @@ fn cat_self_transfer_is_exact_with_the_default_combine() {
     let c = correspond(&cat, &cat, &selfm, &CorrespondenceOptions::default())
         .unwrap()
         .correspondence;
-    let worst = |combine| {
+    let worst = |combine, frame| {
         let tr = morphkit::transfer::AnimationTransfer::new(
             &src,
             &src,
             &c,
             &TransferOptions {
                 combine,
+                frame,
                 ..Default::default()
             },
         )
@@ -324,11 +360,16 @@ fn cat_self_transfer_is_exact_with_the_default_combine() {
         }
         w
     };
-    let (idw, mean) = (
-        worst(GradientCombine::default()),
-        worst(GradientCombine::Mean),
+    let (idw, mean, local) = (
+        worst(GradientCombine::default(), GradientFrame::World),
+        worst(GradientCombine::Mean, GradientFrame::World),
+        worst(GradientCombine::default(), GradientFrame::LocalStretch),
     );
-    eprintln!("cat self-transfer worst error: inverse distance {idw:.2e}, mean {mean:.2e}");
+    eprintln!(
+        "cat self-transfer worst error: inverse distance {idw:.2e}, mean {mean:.2e}, \
+         inverse distance in the local-stretch frame {local:.2e}"
+    );
     assert!(idw < 1e-9, "{idw}");
+    assert!(local < 1e-9, "{local}");
     assert!(mean > 0.01, "mean should blur: {mean}");
 }

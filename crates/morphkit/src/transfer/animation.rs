@@ -2,7 +2,8 @@
 //! translation convention (Wang & Lee 2008, Sec. 3.2.3; Sumner & Popović 2004).
 //!
 //! Each target triangle's wanted gradient $M_j$ combines the gradients of its matched source
-//! triangles ([`GradientCombine`], the mean by default). The solve fixes one constraint vertex
+//! triangles ([`GradientCombine`]: inverse-distance weights by default), with each match's
+//! stretch turned into the target triangle's plane ([`GradientFrame`]). The solve fixes one constraint vertex
 //! per component, which alone would keep the target "running in place" — the limitation the
 //! paper notes ("the constraint vertex is fixed in the same position through the entire
 //! sequence"). [`TranslationMode::FollowMarkers`] (the default) goes beyond it: the result is
@@ -13,12 +14,12 @@
 //! paper's convention. With several target components the translation is one rigid shift of
 //! the whole result, so components keep the placement the constraint vertices give them.
 
-use super::correspondence::{Correspondence, GradientCombine};
+use super::correspondence::{polar, Correspondence, GradientCombine};
 use super::error::{Side, TransferError};
 use super::gradients::{FlipCheck, GradientOperator};
 use super::solve::{SolverOptions, TransferSolver};
 use crate::mesh::{validate, Point, ShapeSet, ShapeSetError, TriMesh};
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Vector3};
 
 /// Where each transferred frame is placed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -30,15 +31,43 @@ pub enum TranslationMode {
     FixedVertex,
 }
 
+/// In which frame a matched source gradient is carried onto its target triangle.
+///
+/// A source gradient splits into a rotation and a stretch, $G = R S$ (polar decomposition).
+/// The rotation is a motion in the world, the same for both characters (a leg swinging
+/// forward); the stretch is a deformation *of the surface*, defined relative to the source
+/// triangle's own plane. Where a matched target triangle is oriented differently in its
+/// reference (a camel's neck against a horse's), carrying $S$ unchanged in world coordinates
+/// applies the source's in-plane stretch partly across the target's surface.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GradientFrame {
+    /// Sumner & Popović as written: the matched gradients as they are, combined linearly
+    /// ([`Correspondence::map_gradients`]). Default.
+    #[default]
+    World,
+    /// The rotations combined by their chordal mean (the projection of the weighted sum
+    /// onto the rotations) and each match's stretch turned by the smallest rotation from its
+    /// source triangle's reference normal onto the target triangle's, matches weighted also
+    /// by how well their reference normals agree ([`Correspondence::map_gradients_local`]).
+    /// Measured on horse ↔ camel and cat ↔ dog (README, issue 9) it lowers the mean
+    /// cycle-consistency error by 17–20 %, but alone it makes more sharp folds (camel: 77 →
+    /// 134 over ten poses), so it is opt-in; with the closest-point refinement and
+    /// area-weighted solves it lowers the cycle error by 21–25 % with no more sharp folds.
+    LocalStretch,
+}
+
 /// Options of [`AnimationTransfer`].
 #[derive(Clone, Debug, Default)]
 pub struct TransferOptions {
     /// Options of the prefactored solve (weights, constraint vertices).
     pub solver: SolverOptions,
-    /// How the gradients of several matched source triangles combine. Default: mean.
+    /// How the gradients of several matched source triangles combine. Default: inverse
+    /// distance.
     pub combine: GradientCombine,
     /// Translation convention. Default: follow the markers.
     pub translation: TranslationMode,
+    /// Frame in which matched gradients are carried over. Default: the world frame.
+    pub frame: GradientFrame,
 }
 
 /// A transfer set up once for a source reference, a target and their correspondence.
@@ -53,6 +82,27 @@ pub struct AnimationTransfer {
     target_flips: FlipCheck,
     placement: Placement,
     combine: GradientCombine,
+    /// Unit reference normals of the source and target triangles
+    /// ([`GradientFrame::LocalStretch`] only).
+    local_frames: Option<LocalFrames>,
+}
+
+/// Unit reference normals of the source and the target triangles.
+type LocalFrames = (Vec<Vector3<f64>>, Vec<Vector3<f64>>);
+
+/// Unit normals of `m`'s triangles (zero for a degenerate one).
+fn unit_normals(m: &TriMesh) -> Vec<Vector3<f64>> {
+    (0..m.num_triangles())
+        .map(|t| {
+            let n = Vector3::from(m.triangle_normal(t));
+            let l = n.norm();
+            if l > 0.0 && l.is_finite() {
+                n / l
+            } else {
+                Vector3::zeros()
+            }
+        })
+        .collect()
 }
 
 /// The translation convention on its own ([`TranslationMode`], module doc), so that a caller
@@ -158,6 +208,8 @@ impl AnimationTransfer {
             target_flips: FlipCheck::new(target),
             placement,
             combine: opts.combine,
+            local_frames: (opts.frame == GradientFrame::LocalStretch)
+                .then(|| (unit_normals(source_reference), unit_normals(target))),
         })
     }
 
@@ -198,10 +250,19 @@ impl AnimationTransfer {
         self.target_flips.flipped(x, target_gradients)
     }
 
-    /// Wanted gradient of every target triangle, from per-source-triangle gradients.
+    /// Wanted gradient of every target triangle, from per-source-triangle gradients, carried
+    /// over in the frame of [`TransferOptions::frame`] ([`GradientFrame`]).
     pub fn target_gradients(&self, source_gradients: &[Matrix3<f64>]) -> Vec<Matrix3<f64>> {
-        self.correspondence
-            .map_gradients(source_gradients, self.combine)
+        match &self.local_frames {
+            None => self
+                .correspondence
+                .map_gradients(source_gradients, self.combine),
+            Some((ns, nt)) => {
+                let pol: Vec<_> = source_gradients.iter().map(polar).collect();
+                self.correspondence
+                    .map_gradients_local(&pol, ns, nt, self.combine)
+            }
+        }
     }
 
     /// Solves for target positions from per-target-triangle gradients (from

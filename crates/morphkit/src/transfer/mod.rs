@@ -25,7 +25,8 @@ pub mod solve;
 pub(crate) mod testmesh;
 
 pub use animation::{
-    transfer_animation, AnimationTransfer, Placement, TransferOptions, TranslationMode,
+    transfer_animation, AnimationTransfer, GradientFrame, Placement, TransferOptions,
+    TranslationMode,
 };
 pub use correspondence::{
     correspond, Correspondence, CorrespondenceOptions, CorrespondenceResult, GradientCombine,

@@ -4,7 +4,7 @@
 use super::super::error::{CorrespondenceError, Side, TransferError};
 use super::{GradientCombine, MarkerResidual, RefineStep};
 use crate::mesh::TriMesh;
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// The `format` tag of correspondence files.
@@ -101,7 +101,36 @@ impl Correspondence {
         }
     }
 
-    /// Per-target-triangle gradients from per-source-triangle gradients.
+    /// Calls `f(source_triangle, weight)` for the matches of target triangle `t` that
+    /// `combine` uses, with their (unnormalised, positive) weights.
+    fn for_each_weight(&self, t: usize, combine: GradientCombine, mut f: impl FnMut(usize, f64)) {
+        let m = self.matches_of(t);
+        match combine {
+            GradientCombine::Nearest => f(m[0] as usize, 1.0),
+            GradientCombine::InverseDistance if !self.distances.is_empty() => {
+                let d = &self.distances[self.offsets[t] as usize..self.offsets[t + 1] as usize];
+                if d[0] == 0.0 {
+                    // Nearest first: the exact matches are a prefix.
+                    for (&i, _) in m.iter().zip(d).take_while(|x| *x.1 == 0.0) {
+                        f(i as usize, 1.0);
+                    }
+                } else {
+                    for (&i, &di) in m.iter().zip(d) {
+                        f(i as usize, 1.0 / f64::from(di));
+                    }
+                }
+            }
+            GradientCombine::InverseDistance | GradientCombine::Mean => {
+                for &i in m {
+                    f(i as usize, 1.0);
+                }
+            }
+        }
+    }
+
+    /// Per-target-triangle gradients from per-source-triangle gradients, combined in the
+    /// world frame ([`GradientFrame::World`](crate::transfer::GradientFrame::World)): the
+    /// weighted mean of the matched source gradients.
     pub fn map_gradients(
         &self,
         source: &[Matrix3<f64>],
@@ -109,37 +138,54 @@ impl Correspondence {
     ) -> Vec<Matrix3<f64>> {
         (0..self.target_triangles)
             .map(|t| {
-                let m = self.matches_of(t);
-                match combine {
-                    GradientCombine::Nearest => source[m[0] as usize],
-                    GradientCombine::InverseDistance if !self.distances.is_empty() => {
-                        let d =
-                            &self.distances[self.offsets[t] as usize..self.offsets[t + 1] as usize];
-                        let mut s = Matrix3::zeros();
-                        if d[0] == 0.0 {
-                            // Nearest first: the exact matches are a prefix.
-                            let k = d.iter().take_while(|&&x| x == 0.0).count();
-                            for &i in &m[..k] {
-                                s += source[i as usize];
-                            }
-                            return s / k as f64;
-                        }
-                        let mut wsum = 0.0;
-                        for (&i, &di) in m.iter().zip(d) {
-                            let w = 1.0 / f64::from(di);
-                            s += source[i as usize] * w;
-                            wsum += w;
-                        }
-                        s / wsum
+                let (mut s, mut wsum) = (Matrix3::zeros(), 0.0);
+                self.for_each_weight(t, combine, |i, w| {
+                    s += source[i] * w;
+                    wsum += w;
+                });
+                s / wsum
+            })
+            .collect()
+    }
+
+    /// Per-target-triangle gradients with each match's stretch turned into the target
+    /// triangle's plane ([`GradientFrame::LocalStretch`](crate::transfer::GradientFrame::LocalStretch)):
+    /// `source_polar` holds the polar factors $(R_i, S_i)$ of every source gradient
+    /// ($G_i = R_i S_i$), `source_normals` / `target_normals` the unit normals of the two
+    /// reference meshes (zero for a degenerate triangle). With $w_k$ the weights of `combine`
+    /// times the agreement $a_k = \max(0, n_k \cdot n_j)$ of the reference normals (the
+    /// weights of `combine` alone when no match agrees), the result is
+    /// $M_j = \operatorname{proj}_{SO(3)}\big(\sum_k w_k R_k\big)\,
+    /// \frac{\sum_k w_k Q_{kj} S_k Q_{kj}^\top}{\sum_k w_k}$, $Q_{kj}$ the smallest rotation
+    /// taking source normal $k$ onto target normal $j$.
+    pub fn map_gradients_local(
+        &self,
+        source_polar: &[(Matrix3<f64>, Matrix3<f64>)],
+        source_normals: &[Vector3<f64>],
+        target_normals: &[Vector3<f64>],
+        combine: GradientCombine,
+    ) -> Vec<Matrix3<f64>> {
+        (0..self.target_triangles)
+            .map(|t| {
+                let nt = target_normals[t];
+                let mut any = false;
+                self.for_each_weight(t, combine, |i, _| {
+                    any |= source_normals[i].dot(&nt) > AGREEMENT_FLOOR;
+                });
+                let (mut r, mut s, mut wsum) = (Matrix3::zeros(), Matrix3::zeros(), 0.0);
+                self.for_each_weight(t, combine, |i, w| {
+                    let c = source_normals[i].dot(&nt);
+                    let w = if any { w * c.max(0.0) } else { w };
+                    if w == 0.0 {
+                        return;
                     }
-                    GradientCombine::InverseDistance | GradientCombine::Mean => {
-                        let mut s = Matrix3::zeros();
-                        for &i in m {
-                            s += source[i as usize];
-                        }
-                        s / m.len() as f64
-                    }
-                }
+                    let (ri, si) = &source_polar[i];
+                    let q = rotation_between(source_normals[i], nt);
+                    r += ri * w;
+                    s += q * si * q.transpose() * w;
+                    wsum += w;
+                });
+                polar(&r).0 * (s / wsum)
             })
             .collect()
     }
@@ -321,4 +367,35 @@ impl Correspondence {
         }
         Ok(())
     }
+}
+
+/// Reference normals agree ([`Correspondence::map_gradients_local`]) when their cosine is
+/// above this.
+const AGREEMENT_FLOOR: f64 = 1e-6;
+
+/// Polar decomposition $M = R S$: $R$ the rotation nearest to $M$ (det +1, from the SVD),
+/// $S = R^\top M$ (symmetric).
+pub fn polar(m: &Matrix3<f64>) -> (Matrix3<f64>, Matrix3<f64>) {
+    let svd = m.svd(true, true);
+    let (Some(u), Some(vt)) = (svd.u, svd.v_t) else {
+        return (Matrix3::identity(), *m);
+    };
+    let mut r = u * vt;
+    if r.determinant() < 0.0 {
+        let mut d = Matrix3::identity();
+        d[(2, 2)] = -1.0;
+        r = u * d * vt;
+    }
+    (r, r.transpose() * m)
+}
+
+/// The smallest rotation taking unit `a` onto unit `b`; the identity when either is zero or
+/// they are nearly opposite (no well-defined smallest rotation).
+pub fn rotation_between(a: Vector3<f64>, b: Vector3<f64>) -> Matrix3<f64> {
+    let c = a.dot(&b);
+    if c < -0.9 || a == Vector3::zeros() || b == Vector3::zeros() {
+        return Matrix3::identity();
+    }
+    let k = a.cross(&b).cross_matrix();
+    Matrix3::identity() + k + k * k / (1.0 + c)
 }

@@ -2,7 +2,8 @@
 //! Sec. 3.1.3; two-way as in Sumner & Popović 2004, Sec. 5.2).
 //!
 //! Target → source: every target triangle gets the source triangles whose centroids lie within
-//! `radius` of its own and whose normals are less than 90° from its own (at most
+//! `radius` of its own and whose normals are less than 90° from its own (cosine above
+//! `min_cos`, 0 by default: [`super::CorrespondenceOptions::min_normal_cos`]; at most
 //! `max_matches`, nearest first), else the nearest compatible one at any distance, else (no
 //! compatible normal anywhere) the nearest usable one, listed as a normal violation.
 //!
@@ -39,6 +40,7 @@ pub(super) fn match_triangles(
     radius: f64,
     max_matches: usize,
     two_way: bool,
+    min_cos: f64,
 ) -> Matching {
     let (cs, ns, usable) = (p.source_centroids, p.source_normals, p.usable);
     let (ct, nt) = (p.target_centroids, p.target_normals);
@@ -49,7 +51,7 @@ pub(super) fn match_triangles(
     let mut cand = Vec::new();
     for t in 0..nft {
         let (q, n) = (ct[t], nt[t]);
-        let compatible = |s: u32| usable[s as usize] && dot(ns[s as usize], n) > 0.0;
+        let compatible = |s: u32| usable[s as usize] && dot(ns[s as usize], n) > min_cos;
         cand.clear();
         let mut scored: Vec<(f64, u32)> = Vec::new();
         if norm(n) > 0.0 && radius > 0.0 {
@@ -92,7 +94,7 @@ pub(super) fn match_triangles(
             }
             let Some((t, d2)) = ttree.nearest_filtered(cs[s], |t| {
                 let m = nt[t as usize];
-                norm(m) > 0.0 && dot(m, n) > 0.0
+                norm(m) > 0.0 && dot(m, n) > min_cos
             }) else {
                 continue;
             };

@@ -4,7 +4,8 @@
 //!    ω = 10 000) with **their markers placed at the target markers' positions**, so the two
 //!    warped meshes have similar shapes.
 //! 2. Triangles are *compatible* when their warped centroids are close and their warped
-//!    normals are less than 90° apart ($n_s \cdot n_t > 0$).
+//!    normals are less than 90° apart ($n_s \cdot n_t > 0$; a stricter cosine with
+//!    [`CorrespondenceOptions::min_normal_cos`]).
 //!    "Close" means within $r = \rho\,\bar\ell_s$, $\bar\ell_s$ the mean edge length of the
 //!    **warped** source mesh and $\rho$ = [`CorrespondenceOptions::radius_factor`]
 //!    (default 1.0): the spacing of source centroids, so that a target triangle collects the
@@ -24,7 +25,7 @@ mod file;
 mod matching;
 pub mod refine;
 
-pub use file::{Correspondence, FORMAT, VERSION};
+pub use file::{polar, rotation_between, Correspondence, FORMAT, VERSION};
 pub use refine::{RefineOptions, RefineStep};
 
 use super::error::{CorrespondenceError, Side};
@@ -54,6 +55,9 @@ pub struct CorrespondenceOptions {
     /// Also add every usable source triangle to its nearest compatible target triangle's
     /// matches ([`matching`]). Default true.
     pub two_way: bool,
+    /// Compatible triangles' placed normals must have a cosine above this. Default 0 (less
+    /// than 90° apart, Sumner & Popović and Wang & Lee).
+    pub min_normal_cos: f64,
 }
 
 impl Default for CorrespondenceOptions {
@@ -64,6 +68,7 @@ impl Default for CorrespondenceOptions {
             max_matches: 8,
             refine: None,
             two_way: true,
+            min_normal_cos: 0.0,
         }
     }
 }
@@ -226,6 +231,7 @@ pub fn correspond(
         radius,
         opts.max_matches,
         opts.two_way,
+        opts.min_normal_cos,
     );
     let correspondence = Correspondence {
         format: FORMAT.into(),

@@ -292,3 +292,61 @@ fn refinement_pulls_the_source_onto_the_target_and_two_way_reaches_every_source_
         Err(CorrespondenceError::Invalid(_))
     ));
 }
+
+#[test]
+fn a_stricter_normal_test_keeps_only_closer_normals() {
+    let s = sphere(16, 10, 1.0);
+    let t = s.with_positions(
+        s.positions
+            .iter()
+            .map(|p| [1.3 * p[0], p[1], 0.7 * p[2]])
+            .collect(),
+    );
+    let ms = markers_on(&s);
+    let opts = CorrespondenceOptions {
+        min_normal_cos: 0.9,
+        ..Default::default()
+    };
+    let r = correspond(&s, &t, &ms, &opts).unwrap();
+    let c = &r.correspondence;
+    let unit = |p: &[Point], tri: [u32; 3]| {
+        let n = triangle_normal(p, tri);
+        n.map(|x| x / norm(n))
+    };
+    for tt in 0..c.target_triangles {
+        if c.normal_violations.contains(&(tt as u32)) {
+            continue;
+        }
+        let nt = unit(&r.warped_target, t.triangles[tt]);
+        for &m in c.matches_of(tt) {
+            let ns = unit(&r.warped_source, s.triangles[m as usize]);
+            assert!(dot(ns, nt) > 0.9, "target {tt}, source {m}");
+        }
+    }
+}
+
+#[test]
+fn the_local_stretch_map_of_an_identity_correspondence_is_the_identity() {
+    let m = sphere(10, 7, 1.0);
+    let def: Vec<Point> = m
+        .positions
+        .iter()
+        .map(|p| {
+            [
+                p[0] * (1.0 + 0.3 * p[2]),
+                p[1] + 0.2 * p[0] * p[0],
+                0.8 * p[2],
+            ]
+        })
+        .collect();
+    let g = GradientOperator::new(&m).gradients(&def).unwrap();
+    let c = Correspondence::identity(&m);
+    let normals: Vec<nalgebra::Vector3<f64>> = (0..m.num_triangles())
+        .map(|t| nalgebra::Vector3::from(m.triangle_normal(t)).normalize())
+        .collect();
+    let pol: Vec<_> = g.iter().map(polar).collect();
+    let local = c.map_gradients_local(&pol, &normals, &normals, GradientCombine::default());
+    for (a, b) in local.iter().zip(&g) {
+        assert!((a - b).norm() < 1e-12, "{a} vs {b}");
+    }
+}
