@@ -349,7 +349,7 @@ impl PhysicalBlend {
 
     /// Solves every weight vector, spread over up to `threads` threads (each with its own
     /// numeric workspace; the symbolic analysis is shared). Results come back in input order
-    /// and equal those of [`solve`](Self::solve) to round-off, whatever the thread count.
+    /// and equal those of [`solve`](Self::solve) bit for bit, whatever the thread count.
     pub fn solve_many(
         &mut self,
         weights: &[Weights],

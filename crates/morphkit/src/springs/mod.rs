@@ -34,8 +34,8 @@
 //! - **A frame is a function of its weights alone.** No solve starts from, or reuses numbers of,
 //!   an earlier solve (the symbolic analysis and buffers are reused, never values), so frame
 //!   order, scrubbing back and forth, threads ([`PhysicalBlend::solve_many`]) and machine load
-//!   change the result only in its last bits (faer's SIMD kernels round by buffer
-//!   alignment; every decision of the iteration is the same). `--alpha a` equals the matching frame of `--frames`.
+//!   do not change a bit of the result (buffers are 64-byte aligned, METIS orderings are
+//!   computed one at a time; the tests compare frames for equality). `--alpha a` equals the matching frame of `--frames`.
 //! - **Kinematic sheets.** Triangles stretched more than [`BlendOptions::kinematic_stretch`]
 //!   (default 10×) between the base and a target are no material: their vertices follow the
 //!   linear blend as boundary conditions, chosen once per rig.
