@@ -227,8 +227,18 @@ impl Cholesky {
         ordering: Ordering,
         precision: Precision,
     ) -> Result<Self, SolveError> {
+        Self::analyze_shared(Arc::new(pattern), ordering, precision)
+    }
+
+    /// Like [`analyze_with`](Self::analyze_with) for a pattern its owner keeps using too
+    /// (shared, not copied).
+    pub fn analyze_shared(
+        pattern: Arc<SymmetricPattern>,
+        ordering: Ordering,
+        precision: Precision,
+    ) -> Result<Self, SolveError> {
         let symbolic = Self::analyze_symbolic(&pattern, ordering)?;
-        Self::with_buffers(Arc::new(pattern), Arc::new(symbolic), precision)
+        Self::with_buffers(pattern, Arc::new(symbolic), precision)
     }
 
     fn analyze_symbolic(

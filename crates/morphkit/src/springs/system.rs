@@ -147,7 +147,7 @@ impl FreeSystem {
         ordering: Ordering,
         precision: Precision,
     ) -> Result<Cholesky, SolveError> {
-        Cholesky::analyze_with((*self.pattern).clone(), ordering, precision)
+        Cholesky::analyze_shared(Arc::clone(&self.pattern), ordering, precision)
     }
 }
 
