@@ -7,7 +7,8 @@ built once per mesh and set of keys, then every slider change is one cheap solve
 objects (Empties) with a custom property `morphkit_vertex` (a vertex id), parented to the mesh
 or naming it in `morphkit_pull_target`: the vertex is held at the Empty's position (Fig. 5).
 Obstacles are closed mesh objects with a custom property `morphkit_obstacle` (true): the blend
-collides with them (Fig. 2; the solver is rebuilt when an obstacle moves).
+collides with them (Fig. 2; the solver is rebuilt when an obstacle moves, and with obstacles
+also when a pull moves, since the scene blend holds its pulls).
 
 Live mode answers a slider at once: it shows the blend's predictor (the rotation-aware
 interpolation every solve starts from, exact at each key; milliseconds) and solves the
@@ -72,9 +73,12 @@ def _signature(obj, scene=None):
     keys = obj.data.shape_keys.key_blocks
     digest = [len(obj.data.vertices), len(obj.data.polygons), keys[0].name]
     if scene is not None:
-        for o in obstacles_of(scene, obj):
+        obstacles = obstacles_of(scene, obj)
+        for o in obstacles:
             digest.append((o.name, tuple(np.array(o.matrix_world).ravel()), len(o.data.vertices)))
         digest.append(tuple(np.array(obj.matrix_world).ravel()))
+        if obstacles:  # a scene blend holds its pulls: a moved pull rebuilds it
+            digest.append(tuple(sorted(pulls_of(obj, scene).items())))
     for k in target_keys(obj):
         c = geometry.key_coords(k)
         digest.append((k.name, float(c.sum()), float(np.abs(c).sum())))
@@ -96,7 +100,8 @@ def solver_for(obj, scene=None):
     targets = [geometry.key_coords(k) for k in target_keys(obj)]
     obstacles = [_obstacle(o, obj) for o in obstacles_of(scene, obj)] if scene else []
     if obstacles:
-        blend = morphkit.SceneBlend(base, targets, F, obstacles=obstacles)
+        pulls = [(v, [(0.0, p)]) for v, p in sorted(pulls_of(obj, scene).items())]
+        blend = morphkit.SceneBlend(base, targets, F, obstacles=obstacles, pulls=pulls)
     else:
         blend = morphkit.PhysicalBlend(base, targets, F)
     # The predictor is taken now: it must not touch the blend while a job solves with it.
@@ -131,9 +136,7 @@ def weights_of(obj):
 def _solve(blend, w, pulls):
     """One equilibrium with morphkit only (no bpy: safe on any thread); (X, stats, contacts)."""
     if isinstance(blend, morphkit_module().SceneBlend):
-        if pulls:
-            raise morphkit_module().BlendError("pulls and obstacles together are not supported yet")
-        X = blend.solve(w)
+        X = blend.solve(w)  # its pulls were given when it was built (see solver_for)
         stats = blend.last_stats
         return X, stats["solver"], stats["collision"]["contacts"]
     X = blend.solve(w, pulls=pulls or None)
