@@ -174,3 +174,24 @@ def test_no_predictor_with_an_interior():
     b = morphkit.PhysicalBlend(V, [bend(V, 1.5)], F, interior="lattice")
     with pytest.raises(morphkit.BlendError, match="interior"):
         b.predictor()
+
+
+def test_tetgen_interior():
+    import os
+    import shutil
+
+    if shutil.which("tetgen") is None:
+        if os.environ.get("MORPHKIT_REQUIRE_TETGEN"):
+            pytest.fail("MORPHKIT_REQUIRE_TETGEN is set but no tetgen is on the PATH")
+        pytest.skip("no tetgen on the PATH")
+    from conftest import capped_tube
+
+    V, F = capped_tube()
+    B = bend(V, 1.5)
+    b = morphkit.PhysicalBlend(V, [B], F, interior="tetgen")
+    assert b.summary["interior"]["interior_vertices"] > 0
+    d = diag(V)
+    assert np.abs(b.solve(1.0) - B).max() <= 1e-6 * d
+    half = b.solve(0.5)
+    assert b.last_stats["converged"]
+    assert 0.9 < morphkit.metrics(V, half, F)["volume_ratio"] < 1.1

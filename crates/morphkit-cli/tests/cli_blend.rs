@@ -219,3 +219,63 @@ fn blend_writes_frames_reports_and_refuses_bad_input() {
     assert!(e.contains("vertices"), "{e}");
     assert!(!d.join("x.obj").exists(), "no partial output");
 }
+
+/// `--factor-precision double` and the default single-precision factor give the same
+/// equilibrium to the gradient tolerance (the factor only preconditions), and a bad value is
+/// refused by name.
+#[test]
+fn factor_precision_changes_the_speed_not_the_answer() {
+    let d = tmp_dir("blend-precision");
+    ok(&["demo", "--out", s(&d)]);
+    let (base, target) = (d.join("base.obj"), d.join("target.obj"));
+    let run = |extra: &[&str], out: &Path| {
+        let mut args = vec![
+            "blend",
+            "--base",
+            s(&base),
+            "--target",
+            s(&target),
+            "--alpha",
+            "0.5",
+            "--out",
+            s(out),
+        ];
+        args.extend_from_slice(extra);
+        ok(&args);
+        vertices(out)
+    };
+    let single = run(&[], &d.join("single.obj"));
+    let double = run(&["--factor-precision", "double"], &d.join("double.obj"));
+    let lin: Vec<[f64; 3]> = vertices(&base)
+        .iter()
+        .zip(vertices(&target))
+        .map(|(p, q)| [0, 1, 2].map(|k| 0.5 * (p[k] + q[k])))
+        .collect();
+    let max = |a: &[[f64; 3]], b: &[[f64; 3]]| {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
+            .fold(0.0, f64::max)
+    };
+    let moved = max(&double, &lin);
+    assert!(moved > 1e-3, "the physical blend equals the linear blend");
+    let diff = max(&single, &double);
+    assert!(
+        diff < 1e-4 * moved,
+        "single vs double: {diff} (moved {moved})"
+    );
+    let e = fails(&[
+        "blend",
+        "--base",
+        s(&base),
+        "--target",
+        s(&target),
+        "--alpha",
+        "0.5",
+        "--out",
+        s(&d.join("x.obj")),
+        "--factor-precision",
+        "half",
+    ]);
+    assert!(e.contains("factor-precision"), "{e}");
+}

@@ -17,7 +17,7 @@ use morphkit::io::{self, FramesOptions};
 use morphkit::mesh::{ShapeSet, Topology};
 use morphkit::springs::{
     blend_metrics, fold_metrics, linear_blend, BlendOptions, BlendResult, FixedVertices,
-    HingeOptions, PhysicalBlend, SpringOptions, Weights,
+    HingeOptions, PhysicalBlend, Precision, SpringOptions, Weights,
 };
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -103,6 +103,10 @@ pub struct BlendArgs {
     /// knob; results agree within the tolerance.
     #[arg(long, default_value_t = 1)]
     pub refactor_every: usize,
+    /// Arithmetic of the Newton preconditioner's factor: `single` (half the memory, faster;
+    /// the equilibrium is the same to the gradient tolerance) or `double`.
+    #[arg(long, default_value = "single", value_parser = ["single", "double"])]
+    pub factor_precision: String,
     /// Refuse meshes whose solver would need more than this many GiB.
     #[arg(long, default_value_t = 8.0)]
     pub max_memory: f64,
@@ -291,6 +295,11 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         gradient_tolerance: a.tolerance,
         kinematic_stretch: a.kinematic_stretch,
         refactor_every: a.refactor_every,
+        factor_precision: if a.factor_precision == "double" {
+            Precision::Double
+        } else {
+            Precision::Single
+        },
         max_memory_bytes: (a.max_memory * (1u64 << 30) as f64) as u64,
         ..Default::default()
     };
