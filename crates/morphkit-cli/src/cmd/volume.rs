@@ -3,8 +3,9 @@
 //! [`VolumetricBlend`]. The flags are parsed here; `blend.rs` only hands over.
 //!
 //! - `--interior none|lattice|tetgen[,density]`: `lattice` fills each closed component with a
-//!   BCC lattice (density 1: spacing two mean edges; 2: half that); open components are
-//!   blended with surface springs alone and listed in the report and on stderr. `tetgen` runs
+//!   BCC lattice (density 1: spacing two mean edges; 2: half that), small holes capped for
+//!   the inside test; components with larger openings are blended with surface springs alone
+//!   and listed in the report and on stderr. `tetgen` runs
 //!   an external `tetgen` (Debian package; AGPL, only run as a separate process) on each closed
 //!   component's surface for a constrained Delaunay tetrahedralization (largest tetrahedron a
 //!   regular one of edge 2 mean edges / density; the surface is not split); without `tetgen`

@@ -20,6 +20,13 @@
 //! Lattice points not connected through lattice edges to a tied point are dropped as well
 //! (their positions in a target would not be determined by the surface). Everything is
 //! deterministic: index arithmetic, no hashing order, no randomness.
+//!
+//! **Small holes.** A component whose only defects are boundary loops that are *small* (each
+//! loop's fan cap around its vertex centroid has at most [`MAX_HOLE_AREA_FRACTION`] of the
+//! component's surface area: the horse's hoof holes, an open tube's end caps, a scan's gaps)
+//! is filled as if those holes were capped: the caps enter the inside test and the volume
+//! only, never the surface or its springs. A larger opening (a face mask's outline) leaves the
+//! component open, with no interior.
 
 use super::options::InteriorOptions;
 use crate::mesh::{norm, sub, Point, Topology};
@@ -27,7 +34,12 @@ use parry3d_f64::math::Vector;
 use parry3d_f64::query::{PointQuery, Ray, RayCast};
 use parry3d_f64::shape::{TriMesh as ParryMesh, TriMeshFlags};
 
-/// A closed, consistently oriented component of the base with its inside test.
+/// Largest area of one hole's cap, as a fraction of its component's surface area, for the hole
+/// to be capped for the inside test (see the module docs).
+pub const MAX_HOLE_AREA_FRACTION: f64 = 0.1;
+
+/// A closed (or closed up to small capped holes), consistently oriented component of the base
+/// with its inside test.
 pub struct Solid {
     /// Component label (as in [`Topology::components`]).
     pub component: usize,
@@ -39,7 +51,73 @@ pub struct Solid {
     pub volume: f64,
     /// Volume centroid in the base.
     pub centroid: Point,
+    /// Holes capped for the inside test (0 for a closed component).
+    pub capped_holes: usize,
     mesh: ParryMesh,
+}
+
+/// A hole's cap: its vertex centroid and the boundary edges `a → b` it closes.
+struct Cap {
+    centre: Point,
+    edges: Vec<[u32; 2]>,
+}
+
+/// The boundary loops of a component's triangles as caps, or `None` when a boundary vertex
+/// has more than one outgoing boundary edge (a pinched boundary: no unique loop).
+fn boundary_caps(base: &[Point], tris: &[[u32; 3]]) -> Option<Vec<Cap>> {
+    let mut directed: Vec<[u32; 2]> = tris
+        .iter()
+        .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
+        .collect();
+    directed.sort_unstable();
+    let boundary: Vec<[u32; 2]> = directed
+        .iter()
+        .copied()
+        .filter(|&[a, b]| directed.binary_search(&[b, a]).is_err())
+        .collect();
+    if boundary.windows(2).any(|w| w[0][0] == w[1][0]) {
+        return None;
+    }
+    let next = |v: u32| {
+        boundary
+            .binary_search_by(|e| e[0].cmp(&v))
+            .ok()
+            .map(|k| boundary[k][1])
+    };
+    let mut used = vec![false; boundary.len()];
+    let mut caps = Vec::new();
+    for start in 0..boundary.len() {
+        if used[start] {
+            continue;
+        }
+        let mut edges = Vec::new();
+        let mut k = start;
+        loop {
+            used[k] = true;
+            edges.push(boundary[k]);
+            let b = boundary[k][1];
+            if b == boundary[start][0] {
+                break;
+            }
+            let nb = next(b)?;
+            k = boundary.binary_search(&[b, nb]).ok()?;
+            if used[k] {
+                return None;
+            }
+        }
+        let mut centre = [0.0; 3];
+        for e in &edges {
+            for a in 0..3 {
+                centre[a] += base[e[0] as usize][a] / edges.len() as f64;
+            }
+        }
+        caps.push(Cap { centre, edges });
+    }
+    Some(caps)
+}
+
+fn triangle_area(a: Point, b: Point, c: Point) -> f64 {
+    0.5 * norm(crate::mesh::cross(sub(b, a), sub(c, a)))
 }
 
 /// A component that gets no interior, and why.
@@ -87,11 +165,11 @@ pub fn solids(base: &[Point], triangles: &[[u32; 3]]) -> (Vec<Solid>, Vec<Skippe
     let label = topo.components();
     let nc = topo.num_components();
     let mut reason: Vec<Option<&str>> = vec![None; nc];
-    for e in topo
-        .boundary_edges()
-        .into_iter()
-        .chain(topo.non_manifold_edges())
-    {
+    let mut holed = vec![false; nc];
+    for e in topo.boundary_edges() {
+        holed[label[topo.edges()[e][0] as usize] as usize] = true;
+    }
+    for e in topo.non_manifold_edges() {
         reason[label[topo.edges()[e][0] as usize] as usize] = Some("open");
     }
     let mut tris: Vec<Vec<[u32; 3]>> = vec![Vec::new(); nc];
@@ -130,7 +208,40 @@ pub fn solids(base: &[Point], triangles: &[[u32; 3]]) -> (Vec<Solid>, Vec<Skippe
             });
             continue;
         }
-        match Solid::new(base, &tris[c], c, &topo) {
+        let caps = if holed[c] {
+            let area: f64 = tris[c]
+                .iter()
+                .map(|t| {
+                    triangle_area(
+                        base[t[0] as usize],
+                        base[t[1] as usize],
+                        base[t[2] as usize],
+                    )
+                })
+                .sum();
+            let small = |cap: &Cap| {
+                let a: f64 = cap
+                    .edges
+                    .iter()
+                    .map(|&[p, q]| triangle_area(base[q as usize], base[p as usize], cap.centre))
+                    .sum();
+                a <= MAX_HOLE_AREA_FRACTION * area
+            };
+            match boundary_caps(base, &tris[c]) {
+                Some(caps) if caps.iter().all(small) => caps,
+                _ => {
+                    skipped.push(SkippedComponent {
+                        component: c,
+                        example_vertex: first[c],
+                        reason: "open".into(),
+                    });
+                    continue;
+                }
+            }
+        } else {
+            Vec::new()
+        };
+        match Solid::new(base, &tris[c], &caps, c, &topo) {
             Some(s) => out.push(s),
             None => skipped.push(SkippedComponent {
                 component: c,
@@ -143,15 +254,37 @@ pub fn solids(base: &[Point], triangles: &[[u32; 3]]) -> (Vec<Solid>, Vec<Skippe
 }
 
 impl Solid {
-    fn new(base: &[Point], tris: &[[u32; 3]], component: usize, topo: &Topology) -> Option<Self> {
+    fn new(
+        base: &[Point],
+        tris: &[[u32; 3]],
+        caps: &[Cap],
+        component: usize,
+        topo: &Topology,
+    ) -> Option<Self> {
         let mut vertices: Vec<u32> = tris.iter().flatten().copied().collect();
         vertices.sort_unstable();
         vertices.dedup();
         let local = |v: u32| vertices.binary_search(&v).unwrap_or(0) as u32;
-        // Signed volume and centroid (divergence theorem over the triangles).
+        // The closed surface of the inside test: the triangles, then each cap's fan (its
+        // centre is point `vertices.len() + k`), in local ids.
+        let nv = vertices.len() as u32;
+        let mut closed: Vec<[u32; 3]> = tris.iter().map(|t| t.map(local)).collect();
+        for (k, cap) in caps.iter().enumerate() {
+            for &[a, b] in &cap.edges {
+                closed.push([local(b), local(a), nv + k as u32]);
+            }
+        }
+        let point = |i: u32| {
+            if i < nv {
+                base[vertices[i as usize] as usize]
+            } else {
+                caps[(i - nv) as usize].centre
+            }
+        };
+        // Signed volume and centroid (divergence theorem over the closed surface).
         let (mut vol, mut cen) = (0.0, [0.0; 3]);
-        for t in tris {
-            let [a, b, c] = t.map(|i| base[i as usize]);
+        for t in &closed {
+            let [a, b, c] = t.map(point);
             let v = crate::mesh::dot(a, crate::mesh::cross(b, c)) / 6.0;
             vol += v;
             for k in 0..3 {
@@ -163,18 +296,11 @@ impl Solid {
         }
         let flip = vol < 0.0;
         let cen = cen.map(|x| x / vol);
-        let indices: Vec<[u32; 3]> = tris
+        let indices: Vec<[u32; 3]> = closed
             .iter()
-            .map(|t| {
-                let l = t.map(local);
-                if flip {
-                    [l[0], l[2], l[1]]
-                } else {
-                    l
-                }
-            })
+            .map(|&l| if flip { [l[0], l[2], l[1]] } else { l })
             .collect();
-        let pts: Vec<Vector> = vertices.iter().map(|&v| v3(base[v as usize])).collect();
+        let pts: Vec<Vector> = (0..nv + caps.len() as u32).map(|i| v3(point(i))).collect();
         let mesh = ParryMesh::with_flags(pts, indices, TriMeshFlags::ORIENTED).ok()?;
         mesh.pseudo_normals()?;
         let (mut sum, mut n) = (0.0, 0usize);
@@ -190,6 +316,7 @@ impl Solid {
             mean_edge: sum / n.max(1) as f64,
             volume: vol.abs(),
             centroid: cen,
+            capped_holes: caps.len(),
             mesh,
         })
     }

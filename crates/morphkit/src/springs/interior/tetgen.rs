@@ -145,6 +145,14 @@ pub fn build_with(
     let stdbuf = std::env::var_os("PATH").and_then(|p| find_in("stdbuf", &p));
     let mut out = Interior::default();
     for s in solids {
+        if s.capped_holes > 0 {
+            skipped.push(SkippedComponent {
+                component: s.component,
+                example_vertex: s.vertices[0],
+                reason: "open (tetgen needs a closed surface; the lattice caps small holes)".into(),
+            });
+            continue;
+        }
         let tris: Vec<[u32; 3]> = triangles
             .iter()
             .copied()
