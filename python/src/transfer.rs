@@ -6,6 +6,7 @@ use crate::arrays::{self, to_array, to_array3};
 use crate::dict::to_dict;
 use crate::errors::{new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
+use morphkit::mesh::TriMesh;
 use morphkit::transfer::rig::{RigOptions, RigTransfer};
 use morphkit::transfer::{
     correspond, AnimationTransfer, Correspondence, CorrespondenceOptions, GradientCombine, Markers,
@@ -178,6 +179,19 @@ pub struct PyTransfer {
     target_vertices: usize,
 }
 
+/// Reads the source and target meshes `[V_s, F_s, V_t, F_t]` and runs the set-up `make` on
+/// them with the GIL released; returns what it built and the two vertex counts.
+fn build<T: Send, E: std::error::Error + Send>(
+    py: Python<'_>,
+    [vs, fs, vt, ft]: [&Bound<'_, PyAny>; 4],
+    make: impl FnOnce(&TriMesh, &TriMesh) -> Result<T, E> + Send,
+) -> PyResult<(T, usize, usize)> {
+    let source = from_arrays("source", vs, fs)?;
+    let target = from_arrays("target", vt, ft)?;
+    let inner = py.detach(|| make(&source, &target)).py(Kind::Transfer)?;
+    Ok((inner, source.num_vertices(), target.num_vertices()))
+}
+
 fn combine_of(name: &str) -> PyResult<GradientCombine> {
     match name {
         "inverse-distance" => Ok(GradientCombine::InverseDistance),
@@ -208,8 +222,6 @@ impl PyTransfer {
         combine: &str,
         translation: &str,
     ) -> PyResult<Self> {
-        let source = from_arrays("source", vs, fs)?;
-        let target = from_arrays("target", vt, ft)?;
         let combine = combine_of(combine)?;
         let translation = match translation {
             "follow" => TranslationMode::FollowMarkers,
@@ -227,13 +239,13 @@ impl PyTransfer {
             ..TransferOptions::default()
         };
         let corr = &correspondence.inner;
-        let inner = py
-            .detach(|| AnimationTransfer::new(&source, &target, corr, &opts))
-            .py(Kind::Transfer)?;
+        let (inner, source_vertices, target_vertices) = build(py, [vs, fs, vt, ft], |s, t| {
+            AnimationTransfer::new(s, t, corr, &opts)
+        })?;
         Ok(Self {
             inner,
-            source_vertices: source.num_vertices(),
-            target_vertices: target.num_vertices(),
+            source_vertices,
+            target_vertices,
         })
     }
 
@@ -311,8 +323,6 @@ impl PyRigTransfer {
         correspondence: &PyCorrespondence,
         combine: &str,
     ) -> PyResult<Self> {
-        let source = from_arrays("source", vs, fs)?;
-        let target = from_arrays("target", vt, ft)?;
         let opts = RigOptions {
             transfer: TransferOptions {
                 combine: combine_of(combine)?,
@@ -320,13 +330,13 @@ impl PyRigTransfer {
             },
         };
         let corr = &correspondence.inner;
-        let inner = py
-            .detach(|| RigTransfer::new(&source, &target, corr, &opts))
-            .py(Kind::Transfer)?;
+        let (inner, source_vertices, target_vertices) = build(py, [vs, fs, vt, ft], |s, t| {
+            RigTransfer::new(s, t, corr, &opts)
+        })?;
         Ok(Self {
             inner,
-            source_vertices: source.num_vertices(),
-            target_vertices: target.num_vertices(),
+            source_vertices,
+            target_vertices,
         })
     }
 
