@@ -153,18 +153,28 @@ cyl.morphkit_live = False
 
 # A pull: an Empty parented to the mesh holds a free vertex.
 free = int(np.argmax(np.linalg.norm(V1 - V0, axis=1)))  # moves, so not auto-fixed
-goal = got[free] + np.array([0.0, 0.0, 0.05 * diag(V0)])
-empty = bpy.data.objects.new("pull", None)
-bpy.context.scene.collection.objects.link(empty)
-empty.parent = cyl
-empty.location = tuple(goal)
-empty["morphkit_vertex"] = free
-bpy.context.view_layer.update()
-activate(cyl)
-check(bpy.ops.morphkit.physical_update() == {"FINISHED"}, "physical_update with a pull failed")
-got = geometry.key_coords(cyl.data.shape_keys.key_blocks[physical.RESULT_KEY])
-results["pull_error"] = float(np.linalg.norm(got[free] - goal)) / diag(V0)
-check(results["pull_error"] < 1e-4, f"the pulled vertex is {results['pull_error']} away")
+
+
+def pull_and_update(offset, name):
+    """Pulls `free` from its current place by `offset` (an Empty), updates, and checks that it
+    sits at the Empty; returns the Empty, the goal and the result."""
+    before = geometry.key_coords(cyl.data.shape_keys.key_blocks[physical.RESULT_KEY])
+    goal = before[free] + np.asarray(offset) * diag(V0)
+    empty = bpy.data.objects.new("pull", None)
+    bpy.context.scene.collection.objects.link(empty)
+    empty.parent = cyl
+    empty.location = tuple(goal)
+    empty["morphkit_vertex"] = free
+    bpy.context.view_layer.update()
+    activate(cyl)
+    check(bpy.ops.morphkit.physical_update() == {"FINISHED"}, f"physical_update ({name}) failed")
+    after = geometry.key_coords(cyl.data.shape_keys.key_blocks[physical.RESULT_KEY])
+    results[name] = float(np.linalg.norm(after[free] - goal)) / diag(V0)
+    check(results[name] < 1e-4, f"{name}: the pulled vertex is {results[name]} away")
+    return empty, goal, after
+
+
+empty, _, got = pull_and_update([0.0, 0.0, 0.05], "pull_error")
 bpy.data.objects.remove(empty)
 
 # Bake a weight animation over the timeline into a PC2 cache on a Mesh Cache modifier.
@@ -237,19 +247,7 @@ if os.environ.get("MORPHKIT_BIN"):
     results["scene_replay_error"] = err
 render("obstacle", cyl, also=[bar])
 # A pull and the obstacle together: the pulled vertex sits at its Empty and nothing enters the bar.
-free = int(np.argmax(np.linalg.norm(V1 - V0, axis=1)))
-goal = got[free] + np.array([0.0, -0.05 * diag(V0), 0.0])
-empty = bpy.data.objects.new("pull", None)
-bpy.context.scene.collection.objects.link(empty)
-empty.parent = cyl
-empty.location = tuple(goal)
-empty["morphkit_vertex"] = free
-bpy.context.view_layer.update()
-activate(cyl)
-check(bpy.ops.morphkit.physical_update() == {"FINISHED"}, "physical_update with a pull and an obstacle failed")
-got = geometry.key_coords(cyl.data.shape_keys.key_blocks[physical.RESULT_KEY])
-results["pull_with_obstacle_error"] = float(np.linalg.norm(got[free] - goal)) / diag(V0)
-check(results["pull_with_obstacle_error"] < 1e-4, f"the pulled vertex is {results['pull_with_obstacle_error']} away")
+empty, goal, got = pull_and_update([0.0, -0.05, 0.0], "pull_with_obstacle_error")
 sbp = morphkit.SceneBlend(V0, [V1], F_b, obstacles=[obst], pulls=[(free, [(0.0, tuple(goal))])])
 err = float(np.abs(got - sbp.solve(1.0)).max()) / diag(V0)
 check(err < 1e-6, f"the pull-and-obstacle blend differs from the module by {err}")

@@ -220,6 +220,10 @@ fn blend_writes_frames_reports_and_refuses_bad_input() {
     assert!(!d.join("x.obj").exists(), "no partial output");
 }
 
+fn refs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
+
 /// `--factor-precision double` and the default single-precision factor give the same
 /// equilibrium to the gradient tolerance (the factor only preconditions), and a bad value is
 /// refused by name.
@@ -228,8 +232,10 @@ fn factor_precision_changes_the_speed_not_the_answer() {
     let d = tmp_dir("blend-precision");
     ok(&["demo", "--out", s(&d)]);
     let (base, target) = (d.join("base.obj"), d.join("target.obj"));
-    let run = |extra: &[&str], out: &Path| {
-        let mut args = vec![
+    let (single_out, double_out, bad_out) =
+        (d.join("single.obj"), d.join("double.obj"), d.join("x.obj"));
+    let args = |out: &std::path::PathBuf, precision: &'static str| -> Vec<String> {
+        [
             "blend",
             "--base",
             s(&base),
@@ -237,15 +243,17 @@ fn factor_precision_changes_the_speed_not_the_answer() {
             s(&target),
             "--alpha",
             "0.5",
+            "--factor-precision",
+            precision,
             "--out",
             s(out),
-        ];
-        args.extend_from_slice(extra);
-        ok(&args);
-        vertices(out)
+        ]
+        .map(String::from)
+        .to_vec()
     };
-    let single = run(&[], &d.join("single.obj"));
-    let double = run(&["--factor-precision", "double"], &d.join("double.obj"));
+    ok(&refs(&args(&single_out, "single")));
+    ok(&refs(&args(&double_out, "double")));
+    let (single, double) = (vertices(&single_out), vertices(&double_out));
     let lin: Vec<[f64; 3]> = vertices(&base)
         .iter()
         .zip(vertices(&target))
@@ -264,18 +272,6 @@ fn factor_precision_changes_the_speed_not_the_answer() {
         diff < 1e-4 * moved,
         "single vs double: {diff} (moved {moved})"
     );
-    let e = fails(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&target),
-        "--alpha",
-        "0.5",
-        "--out",
-        s(&d.join("x.obj")),
-        "--factor-precision",
-        "half",
-    ]);
+    let e = fails(&refs(&args(&bad_out, "half")));
     assert!(e.contains("factor-precision"), "{e}");
 }
