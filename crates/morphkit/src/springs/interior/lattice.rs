@@ -28,15 +28,13 @@
 //! only, never the surface or its springs. A larger opening (a face mask's outline) leaves the
 //! component open, with no interior.
 
+pub use super::holes::MAX_HOLE_AREA_FRACTION;
+use super::holes::{small_hole_caps, Cap};
 use super::options::InteriorOptions;
 use crate::mesh::{norm, sub, Point, Topology};
 use parry3d_f64::math::Vector;
 use parry3d_f64::query::{PointQuery, Ray, RayCast};
 use parry3d_f64::shape::{TriMesh as ParryMesh, TriMeshFlags};
-
-/// Largest area of one hole's cap, as a fraction of its component's surface area, for the hole
-/// to be capped for the inside test (see the module docs).
-pub const MAX_HOLE_AREA_FRACTION: f64 = 0.1;
 
 /// A closed (or closed up to small capped holes), consistently oriented component of the base
 /// with its inside test.
@@ -54,70 +52,6 @@ pub struct Solid {
     /// Holes capped for the inside test (0 for a closed component).
     pub capped_holes: usize,
     mesh: ParryMesh,
-}
-
-/// A hole's cap: its vertex centroid and the boundary edges `a → b` it closes.
-struct Cap {
-    centre: Point,
-    edges: Vec<[u32; 2]>,
-}
-
-/// The boundary loops of a component's triangles as caps, or `None` when a boundary vertex
-/// has more than one outgoing boundary edge (a pinched boundary: no unique loop).
-fn boundary_caps(base: &[Point], tris: &[[u32; 3]]) -> Option<Vec<Cap>> {
-    let mut directed: Vec<[u32; 2]> = tris
-        .iter()
-        .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
-        .collect();
-    directed.sort_unstable();
-    let boundary: Vec<[u32; 2]> = directed
-        .iter()
-        .copied()
-        .filter(|&[a, b]| directed.binary_search(&[b, a]).is_err())
-        .collect();
-    if boundary.windows(2).any(|w| w[0][0] == w[1][0]) {
-        return None;
-    }
-    let next = |v: u32| {
-        boundary
-            .binary_search_by(|e| e[0].cmp(&v))
-            .ok()
-            .map(|k| boundary[k][1])
-    };
-    let mut used = vec![false; boundary.len()];
-    let mut caps = Vec::new();
-    for start in 0..boundary.len() {
-        if used[start] {
-            continue;
-        }
-        let mut edges = Vec::new();
-        let mut k = start;
-        loop {
-            used[k] = true;
-            edges.push(boundary[k]);
-            let b = boundary[k][1];
-            if b == boundary[start][0] {
-                break;
-            }
-            let nb = next(b)?;
-            k = boundary.binary_search(&[b, nb]).ok()?;
-            if used[k] {
-                return None;
-            }
-        }
-        let mut centre = [0.0; 3];
-        for e in &edges {
-            for a in 0..3 {
-                centre[a] += base[e[0] as usize][a] / edges.len() as f64;
-            }
-        }
-        caps.push(Cap { centre, edges });
-    }
-    Some(caps)
-}
-
-fn triangle_area(a: Point, b: Point, c: Point) -> f64 {
-    0.5 * norm(crate::mesh::cross(sub(b, a), sub(c, a)))
 }
 
 /// A component that gets no interior, and why.
@@ -209,26 +143,8 @@ pub fn solids(base: &[Point], triangles: &[[u32; 3]]) -> (Vec<Solid>, Vec<Skippe
             continue;
         }
         let caps = if holed[c] {
-            let area: f64 = tris[c]
-                .iter()
-                .map(|t| {
-                    triangle_area(
-                        base[t[0] as usize],
-                        base[t[1] as usize],
-                        base[t[2] as usize],
-                    )
-                })
-                .sum();
-            let small = |cap: &Cap| {
-                let a: f64 = cap
-                    .edges
-                    .iter()
-                    .map(|&[p, q]| triangle_area(base[q as usize], base[p as usize], cap.centre))
-                    .sum();
-                a <= MAX_HOLE_AREA_FRACTION * area
-            };
-            match boundary_caps(base, &tris[c]) {
-                Some(caps) if caps.iter().all(small) => caps,
+            match small_hole_caps(base, &tris[c]) {
+                Some(caps) => caps,
                 _ => {
                     skipped.push(SkippedComponent {
                         component: c,
@@ -600,68 +516,5 @@ fn oriented(t: [u32; 4], p: impl Fn(u32) -> Point) -> [u32; 4] {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::mesh::generate;
-
-    #[test]
-    fn a_sphere_gets_a_connected_lattice_strictly_inside() {
-        let m = generate::uv_sphere(1.0, 16, 24);
-        let i = build(&m.positions, &m.triangles, &InteriorOptions::default());
-        assert!(i.skipped.is_empty(), "{:?}", i.skipped);
-        assert!(i.points.len() > 20, "{}", i.points.len());
-        let h = i.spacing[0].1;
-        for p in &i.points {
-            assert!(norm(*p) <= 1.0 - 0.3 * h, "{p:?}");
-        }
-        // Every tet is positive and has only lattice springs as edges.
-        let n = m.num_vertices() as u32;
-        assert!(!i.tets.is_empty());
-        for t in &i.tets {
-            assert!(tet_volume6(|v| out_pos(&m.positions, &i.points, v), *t) > 0.0);
-            assert!(t.iter().all(|&v| v >= n));
-        }
-        // Lattice-tet volume is a good part of the ball.
-        let vol: f64 = i
-            .tets
-            .iter()
-            .map(|t| tet_volume6(|v| out_pos(&m.positions, &i.points, v), *t) / 6.0)
-            .sum();
-        assert!(vol > 0.2 * 4.19, "{vol}");
-        // Every surface vertex has a tie.
-        let mut tied = vec![false; n as usize];
-        for s in &i.springs {
-            if s[0] < n {
-                tied[s[0] as usize] = true;
-            }
-        }
-        assert!(tied.iter().filter(|t| **t).count() > (n as usize) * 9 / 10);
-    }
-
-    #[test]
-    fn open_and_misoriented_components_are_skipped() {
-        let open = generate::tube(0.5, 2.0, 12, 8, false);
-        let i = build(
-            &open.positions,
-            &open.triangles,
-            &InteriorOptions::default(),
-        );
-        assert!(i.points.is_empty());
-        assert_eq!(i.skipped.len(), 1);
-        assert_eq!(i.skipped[0].reason, "open");
-        let mut bad = generate::uv_sphere(1.0, 8, 12);
-        bad.triangles[3].swap(1, 2);
-        let i = build(&bad.positions, &bad.triangles, &InteriorOptions::default());
-        assert!(i.points.is_empty());
-        assert_eq!(i.skipped[0].reason, "not consistently oriented");
-        // An inward-oriented sphere is flipped, not skipped.
-        let mut inward = generate::uv_sphere(1.0, 8, 12);
-        inward.triangles.iter_mut().for_each(|t| t.swap(1, 2));
-        let i = build(
-            &inward.positions,
-            &inward.triangles,
-            &InteriorOptions::default(),
-        );
-        assert!(!i.points.is_empty());
-    }
-}
+#[path = "lattice_tests.rs"]
+mod tests;

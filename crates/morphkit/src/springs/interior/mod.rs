@@ -63,6 +63,7 @@
 //! and the radius–edge bound (`-q1.414`) do the refinement; the surface itself is not split.
 
 pub mod anchor;
+mod holes;
 mod inversion;
 pub mod lattice;
 mod options;

@@ -1,0 +1,153 @@
+use super::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// A random sparse SPD matrix: a graph Laplacian plus a positive diagonal shift.
+pub(crate) fn random_spd(n: usize, seed: u64) -> Vec<(usize, usize, f64)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut t = Vec::new();
+    let mut diag = vec![0.1; n];
+    for i in 0..n {
+        for _ in 0..3 {
+            let j = rng.random_range(0..n);
+            if j != i {
+                let w: f64 = rng.random_range(0.1..2.0);
+                t.push((i.max(j), i.min(j), -w));
+                diag[i] += w;
+                diag[j] += w;
+            }
+        }
+    }
+    t.extend(diag.into_iter().enumerate().map(|(i, d)| (i, i, d)));
+    t
+}
+
+fn residual(p: &SymmetricPattern, v: &[f64], x: &[f64], b: &[f64]) -> f64 {
+    let ax = p.mul_vec(v, x);
+    let r: f64 = ax
+        .iter()
+        .zip(b)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    r / b.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+#[test]
+fn residual_is_small_on_random_spd_systems() {
+    for (n, seed) in [(1, 1), (10, 2), (200, 3), (3000, 4)] {
+        let t = random_spd(n, seed);
+        let (p, v) = SymmetricPattern::from_triplets(n, &t).unwrap();
+        let mut chol = Cholesky::analyze(p.clone(), Ordering::Amd).unwrap();
+        chol.factorize(&v).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed + 100);
+        let b: Vec<f64> = (0..2 * n).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let mut x = b.clone();
+        chol.solve_in_place(&mut x, 2).unwrap();
+        for c in 0..2 {
+            let r = residual(&p, &v, &x[c * n..(c + 1) * n], &b[c * n..(c + 1) * n]);
+            assert!(r < 1e-10, "n = {n}: relative residual {r}");
+        }
+    }
+}
+
+/// A single-precision factor solves to f32 accuracy (a preconditioner), in half the
+/// memory, with `solve_one` and `solve_in_place` agreeing, and shares its symbolic
+/// analysis with a double factor of the same pattern.
+#[test]
+fn single_precision_factor_is_an_f32_accurate_solver() {
+    let n = 2000;
+    let t = random_spd(n, 5);
+    let (p, v) = SymmetricPattern::from_triplets(n, &t).unwrap();
+    let mut single = Cholesky::analyze_with(p.clone(), Ordering::Amd, Precision::Single).unwrap();
+    assert_eq!(single.precision(), Precision::Single);
+    single.factorize(&v).unwrap();
+    let mut double = single.share_symbolic_with(Precision::Double).unwrap();
+    double.factorize(&v).unwrap();
+    assert_eq!(single.factor_nnz(), double.factor_nnz());
+    let b: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).sin()).collect();
+    let mut xs = b.clone();
+    single.solve_one(&mut xs).unwrap();
+    let xd = double.solve(&b).unwrap();
+    let rs = residual(&p, &v, &xs, &b);
+    assert!(rs < 1e-4 && rs > 1e-12, "single residual {rs}");
+    assert!(residual(&p, &v, &xd, &b) < 1e-10);
+    let mut xm = b.clone();
+    single.solve_in_place(&mut xm, 1).unwrap();
+    assert_eq!(xm, xs);
+}
+
+#[test]
+fn pattern_reuse_matches_a_fresh_factorization() {
+    let n = 500;
+    let t = random_spd(n, 7);
+    let (p, v) = SymmetricPattern::from_triplets(n, &t).unwrap();
+    let mut reused = Cholesky::analyze(p.clone(), Ordering::Amd).unwrap();
+    reused.factorize(&v).unwrap();
+    // New values, same pattern: scale off-diagonals, bump the diagonal.
+    let v2: Vec<f64> = v
+        .iter()
+        .map(|x| if *x < 0.0 { 0.5 * x } else { x + 1.0 })
+        .collect();
+    reused.factorize(&v2).unwrap();
+    let mut fresh = Cholesky::analyze(p.clone(), Ordering::Amd).unwrap();
+    fresh.factorize(&v2).unwrap();
+    let b: Vec<f64> = (0..n).map(|i| (i as f64).sin()).collect();
+    let (x1, x2) = (reused.solve(&b).unwrap(), fresh.solve(&b).unwrap());
+    assert_eq!(
+        x1, x2,
+        "the same symbolic analysis and values give bitwise the same result"
+    );
+    assert!(residual(&p, &v2, &x1, &b) < 1e-12);
+}
+
+#[test]
+fn orderings_agree() {
+    let n = 300;
+    let t = random_spd(n, 9);
+    let (p, v) = SymmetricPattern::from_triplets(n, &t).unwrap();
+    let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.3).cos()).collect();
+    let rev: Vec<usize> = (0..n).rev().collect();
+    let mut xs = Vec::new();
+    for ord in [Ordering::Amd, Ordering::Identity, Ordering::Custom(rev)] {
+        let mut c = Cholesky::analyze(p.clone(), ord).unwrap();
+        c.factorize(&v).unwrap();
+        xs.push(c.solve(&b).unwrap());
+    }
+    for x in &xs[1..] {
+        let d = x
+            .iter()
+            .zip(&xs[0])
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(d < 1e-10);
+    }
+}
+
+#[test]
+fn singular_and_indefinite_matrices_are_errors_not_nans() {
+    // Path-graph Laplacian: singular (constant null space).
+    let t = vec![
+        (0, 0, 1.0),
+        (1, 0, -1.0),
+        (1, 1, 2.0),
+        (2, 1, -1.0),
+        (2, 2, 1.0),
+    ];
+    let (p, v) = SymmetricPattern::from_triplets(3, &t).unwrap();
+    let mut c = Cholesky::analyze(p, Ordering::Amd).unwrap();
+    assert!(matches!(
+        c.factorize(&v),
+        Err(SolveError::NotPositiveDefinite { .. })
+    ));
+    assert!(
+        c.solve(&[1.0, 0.0, 0.0]).is_err(),
+        "no solve after a failed factorization"
+    );
+    let (p, v) = SymmetricPattern::from_triplets(2, &[(0, 0, 1.0), (1, 1, -1.0)]).unwrap();
+    let mut c = Cholesky::analyze(p, Ordering::Amd).unwrap();
+    assert!(c.factorize(&v).is_err());
+    let (p, v) = SymmetricPattern::from_triplets(1, &[(0, 0, f64::NAN)]).unwrap();
+    let mut c = Cholesky::analyze(p, Ordering::Amd).unwrap();
+    assert!(matches!(c.factorize(&v), Err(SolveError::NonFinite { .. })));
+}
