@@ -195,14 +195,16 @@ fn check(p: &Pair, time_budget: Option<f64>, best_lower: f64) {
     }
 }
 
-#[test]
-fn horse_camel_cycle_consistency_improves() {
+/// Horse → camel with the ten horse poses, or `None` (after a skip line naming `test`) when
+/// `MORPHKIT_DATA` is unset.
+fn horse_camel(test: &str) -> Option<Pair> {
     let (Some(h), Some(c), Some(mk)) = (
         common::data_file("sumner-horse-camel/horse-reference.obj.gz"),
         common::data_file("sumner-horse-camel/camel-reference.obj.gz"),
         common::data_file("sumner-horse-camel/markers-horse-camel.json"),
     ) else {
-        return common::skip("horse_camel_cycle_consistency_improves");
+        common::skip(test);
+        return None;
     };
     let horse = read_mesh(&h).unwrap();
     let dir = common::data_dir().unwrap().join("sumner-horse-camel");
@@ -210,13 +212,20 @@ fn horse_camel_cycle_consistency_improves() {
         .map(|i| dir.join(format!("horse-{i:02}.obj.gz")))
         .collect();
     let poses = read_shape_set(&paths).unwrap();
-    let p = Pair {
+    Some(Pair {
         name: "horse↔camel",
         a_corr: horse.clone(),
         a_ref: horse,
         frames: poses.all_positions().to_vec(),
         b: read_mesh(&c).unwrap(),
         markers: Markers::read(&mk).unwrap(),
+    })
+}
+
+#[test]
+fn horse_camel_cycle_consistency_improves() {
+    let Some(p) = horse_camel("horse_camel_cycle_consistency_improves") else {
+        return;
     };
     check(&p, Some(2.0), 25.0);
 }
@@ -254,26 +263,8 @@ fn cat_dog_cycle_consistency_improves() {
 #[test]
 #[ignore = "a tuning tool, not a check: it prints measurements of the EXPLORE variants and asserts nothing; run it with --ignored"]
 fn explore() {
-    let (Some(h), Some(c), Some(mk)) = (
-        common::data_file("sumner-horse-camel/horse-reference.obj.gz"),
-        common::data_file("sumner-horse-camel/camel-reference.obj.gz"),
-        common::data_file("sumner-horse-camel/markers-horse-camel.json"),
-    ) else {
-        return common::skip("explore");
-    };
-    let horse = read_mesh(&h).unwrap();
-    let dir = common::data_dir().unwrap().join("sumner-horse-camel");
-    let paths: Vec<PathBuf> = (1..=10)
-        .map(|i| dir.join(format!("horse-{i:02}.obj.gz")))
-        .collect();
-    let poses = read_shape_set(&paths).unwrap();
-    let hp = Pair {
-        name: "horse",
-        a_corr: horse.clone(),
-        a_ref: horse,
-        frames: poses.all_positions().to_vec(),
-        b: read_mesh(&c).unwrap(),
-        markers: Markers::read(&mk).unwrap(),
+    let Some(hp) = horse_camel("explore") else {
+        return;
     };
     let spec = std::env::var("EXPLORE").unwrap_or_default();
     for item in spec.split(';').filter(|s| !s.is_empty()) {

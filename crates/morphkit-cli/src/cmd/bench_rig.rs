@@ -47,13 +47,15 @@ pub fn run_rig_bench(data_dir: &Path) -> anyhow::Result<Value> {
         source_neutral: Some(neutral_path.clone()),
         source_shapes: vec![format!("{}/[a-fh-z]*.obj.gz", ict.display())],
         target: head_path.clone(),
-        markers: Some(markers_path.clone()),
-        correspondence: None,
+        corr: super::corr_args::CorrespondenceArgs {
+            markers: Some(markers_path.clone()),
+            correspondence: None,
+            combine: "inverse-distance".into(),
+            refine: false,
+        },
         out: dir.join("head-rig.glb"),
         shapes_dir: None,
         report: Some(dir.join("rig.json")),
-        combine: "inverse-distance".into(),
-        refine: false,
     };
     let mut times = Vec::new();
     for round in 0..3 {

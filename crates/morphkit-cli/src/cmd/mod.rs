@@ -8,6 +8,7 @@ pub mod bench_transfer;
 pub mod bench_volume;
 pub mod blend;
 pub mod convert;
+pub mod corr_args;
 pub mod correspond;
 pub mod demo;
 pub mod flex;

@@ -2,14 +2,11 @@
 //! character as named glTF morph targets, one deformation transfer per expression
 //! ([`morphkit::transfer::rig`]).
 
-use super::correspond::{print_summary, summary};
+use super::corr_args::CorrespondenceArgs;
 use crate::outputs::{Kind, Plan};
 use anyhow::{bail, Context};
 use morphkit::io::{self, Format, GltfMorphs};
-use morphkit::transfer::{
-    correspond, Correspondence, CorrespondenceOptions, GradientCombine, Markers, RefineOptions,
-    RigOptions, RigTransfer,
-};
+use morphkit::transfer::{RigOptions, RigTransfer};
 use morphkit::{ShapeSet, TriMesh};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -41,12 +38,8 @@ pub struct RigArgs {
     /// Target neutral mesh (the new character).
     #[arg(long, value_name = "MESH")]
     pub target: PathBuf,
-    /// Marker pairs (computes the correspondence first).
-    #[arg(long, value_name = "JSON", conflicts_with = "correspondence")]
-    pub markers: Option<PathBuf>,
-    /// A correspondence written by `morphkit correspond`.
-    #[arg(long, value_name = "JSON")]
-    pub correspondence: Option<PathBuf>,
+    #[command(flatten)]
+    pub corr: CorrespondenceArgs,
     /// Output rig: .glb or .gltf, the target with one named morph target per shape, or .usda
     /// (UsdSkel blend shapes with the same names).
     #[arg(long, value_name = "GLB")]
@@ -57,13 +50,6 @@ pub struct RigArgs {
     /// Write a JSON report (per-shape timings and fold counts).
     #[arg(long, value_name = "JSON")]
     pub report: Option<PathBuf>,
-    /// How gradients of several matched source triangles combine.
-    #[arg(long, default_value = "inverse-distance", value_parser = ["inverse-distance", "mean", "nearest"])]
-    pub combine: String,
-    /// With --markers: refine the correspondence by closest points (Sumner & Popović 2004,
-    /// Sec. 5).
-    #[arg(long)]
-    pub refine: bool,
 }
 
 /// The file stem without mesh extensions: `dir/jawOpen.obj.gz` → `jawOpen`.
@@ -129,9 +115,7 @@ fn read_source(args: &RigArgs, files: &[PathBuf]) -> anyhow::Result<(TriMesh, Sh
 /// Runs `morphkit rig`.
 pub fn run(args: &RigArgs) -> anyhow::Result<()> {
     let t_all = Instant::now();
-    if args.markers.is_none() && args.correspondence.is_none() {
-        bail!("give --markers JSON or --correspondence JSON");
-    }
+    args.corr.require()?;
     if !matches!(
         Format::from_path(&args.out),
         Some(Format::Glb | Format::Gltf | Format::Usda)
@@ -146,8 +130,7 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
     let mut inputs = expanded.protected;
     inputs.extend([args.target.clone()]);
     inputs.extend(args.source_neutral.iter().cloned());
-    inputs.extend(args.markers.iter().cloned());
-    inputs.extend(args.correspondence.iter().cloned());
+    inputs.extend(args.corr.inputs());
     crate::util::announce_reading(&inputs);
     let (neutral, shapes) = read_source(args, &files)?;
     check_names(shapes.names())?;
@@ -181,37 +164,12 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
         "out": args.out,
         "shapes": shapes.len(),
     });
-    let corr = match (&args.markers, &args.correspondence) {
-        (Some(m), _) => {
-            let markers = Markers::read(m)?;
-            crate::util::announce_work("computing the correspondence", target.num_vertices());
-            let t0 = Instant::now();
-            let copts = CorrespondenceOptions {
-                refine: args.refine.then(RefineOptions::default),
-                ..Default::default()
-            };
-            let r = correspond(&neutral, &target, &markers, &copts).context("correspondence")?;
-            let secs = t0.elapsed().as_secs_f64();
-            print_summary(&r, secs);
-            report["correspondence"] = summary(&r, secs);
-            r.correspondence
-        }
-        (None, Some(c)) => {
-            let text = std::fs::read_to_string(c)
-                .with_context(|| format!("{}: cannot read the correspondence", c.display()))?;
-            let corr =
-                Correspondence::from_json(&text).with_context(|| format!("{}", c.display()))?;
-            report["correspondence"] = json!({ "file": c, "seconds": 0.0 });
-            corr
-        }
-        (None, None) => unreachable!("checked above"),
-    };
+    let corr = args
+        .corr
+        .obtain(&neutral, &target, &mut report)?
+        .correspondence;
     let mut opts = RigOptions::default();
-    opts.transfer.combine = match args.combine.as_str() {
-        "nearest" => GradientCombine::Nearest,
-        "mean" => GradientCombine::Mean,
-        _ => GradientCombine::InverseDistance,
-    };
+    opts.transfer.combine = args.corr.combine();
     crate::util::announce_work("factorizing the transfer system", target.num_vertices());
     let t0 = Instant::now();
     let rt = RigTransfer::new(&neutral, &target, &corr, &opts)?;

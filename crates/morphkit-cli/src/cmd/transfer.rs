@@ -1,14 +1,13 @@
 //! `morphkit transfer`: transfer a source animation onto a different target mesh
 //! (Wang & Lee 2008, Sec. 3.2.3; Sumner & Popović 2004).
 
-use super::correspond::{print_summary, summary};
+use super::corr_args::CorrespondenceArgs;
 use crate::outputs::{Kind, Plan};
 use crate::util::{check_fps, check_positive, progress};
-use anyhow::{bail, Context};
+use anyhow::Context;
 use morphkit::io::{self, Format, FramesOptions};
 use morphkit::transfer::{
-    correspond, cycle_consistency, sharp_folds, AnimationTransfer, Correspondence,
-    CorrespondenceOptions, GradientCombine, GradientFrame, Markers, RefineOptions, TransferOptions,
+    correspond, cycle_consistency, sharp_folds, AnimationTransfer, GradientFrame, TransferOptions,
     TranslationMode, TriangleWeighting,
 };
 use morphkit::ShapeSet;
@@ -44,12 +43,8 @@ pub struct TransferArgs {
     /// Target reference mesh.
     #[arg(long, value_name = "MESH")]
     pub target: PathBuf,
-    /// Marker pairs (computes the correspondence first).
-    #[arg(long, value_name = "JSON", conflicts_with = "correspondence")]
-    pub markers: Option<PathBuf>,
-    /// A correspondence written by `morphkit correspond`.
-    #[arg(long, value_name = "JSON")]
-    pub correspondence: Option<PathBuf>,
+    #[command(flatten)]
+    pub corr: CorrespondenceArgs,
     /// Output: a directory of numbered OBJ frames, a .glb/.gltf or a .pc2.
     #[arg(long, value_name = "OUT")]
     pub out: PathBuf,
@@ -62,14 +57,6 @@ pub struct TransferArgs {
     /// Keep constraint vertices fixed (the paper's convention); optionally name the vertex.
     #[arg(long, value_name = "VERTEX", num_args = 0..=1, allow_negative_numbers = true)]
     pub fixed_vertex: Option<Option<i64>>,
-    /// How gradients of several matched source triangles combine: inverse-distance (weights
-    /// 1/d; exact on a mesh onto itself), mean, or nearest.
-    #[arg(long, default_value = "inverse-distance", value_parser = ["inverse-distance", "mean", "nearest"])]
-    pub combine: String,
-    /// With --markers: refine the correspondence by closest points (Sumner & Popović 2004,
-    /// Sec. 5) before matching.
-    #[arg(long)]
-    pub refine: bool,
     /// Weight triangles by area instead of uniformly (Eq. 6).
     #[arg(long)]
     pub area_weighted: bool,
@@ -124,11 +111,7 @@ fn options(args: &TransferArgs) -> anyhow::Result<TransferOptions> {
             o.solver.constraint_vertices = vec![id];
         }
     }
-    o.combine = match args.combine.as_str() {
-        "nearest" => GradientCombine::Nearest,
-        "mean" => GradientCombine::Mean,
-        _ => GradientCombine::InverseDistance,
-    };
+    o.combine = args.corr.combine();
     if args.area_weighted {
         o.solver.weighting = TriangleWeighting::Area;
     }
@@ -137,12 +120,7 @@ fn options(args: &TransferArgs) -> anyhow::Result<TransferOptions> {
     }
     check_positive("--source-scale", args.source_scale)?;
     check_fps(args.fps)?;
-    if args.markers.is_none() && args.correspondence.is_none() {
-        bail!(
-            "give --markers JSON (marker pairs; the correspondence is computed first) or \
-             --correspondence JSON (a file written by morphkit correspond)"
-        );
-    }
+    args.corr.require()?;
     Ok(o)
 }
 
@@ -153,8 +131,7 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
     let frame_paths = expanded.files;
     let mut inputs = expanded.protected;
     inputs.extend([args.source_ref.clone(), args.target.clone()]);
-    inputs.extend(args.markers.iter().cloned());
-    inputs.extend(args.correspondence.iter().cloned());
+    inputs.extend(args.corr.inputs());
     let mut outputs = Plan::new(&inputs)
         .force(args.force)
         .output("--out", &args.out, Kind::Animation)
@@ -194,34 +171,11 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         "out": args.out,
     });
     let mut cycle = None;
-    let corr = match (&args.markers, &args.correspondence) {
-        (Some(m), _) => {
-            let markers = Markers::read(m)?;
-            crate::util::announce_work("computing the correspondence", target.num_vertices());
-            let t0 = Instant::now();
-            let copts = CorrespondenceOptions {
-                refine: args.refine.then(RefineOptions::default),
-                ..Default::default()
-            };
-            let r = correspond(&source_ref, &target, &markers, &copts).context("correspondence")?;
-            let secs = t0.elapsed().as_secs_f64();
-            print_summary(&r, secs);
-            report["correspondence"] = summary(&r, secs);
-            if args.report.is_some() {
-                cycle = Some((markers, copts));
-            }
-            r.correspondence
-        }
-        (None, Some(c)) => {
-            let text = std::fs::read_to_string(c)
-                .with_context(|| format!("{}: cannot read the correspondence", c.display()))?;
-            let corr =
-                Correspondence::from_json(&text).with_context(|| format!("{}", c.display()))?;
-            report["correspondence"] = json!({ "file": c, "seconds": 0.0 });
-            corr
-        }
-        (None, None) => bail!("give --markers or --correspondence"),
-    };
+    let obtained = args.corr.obtain(&source_ref, &target, &mut report)?;
+    if args.report.is_some() {
+        cycle = obtained.computed_from;
+    }
+    let corr = obtained.correspondence;
 
     crate::util::announce_work("factorizing the transfer system", target.num_vertices());
     let t0 = Instant::now();

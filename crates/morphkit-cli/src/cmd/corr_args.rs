@@ -1,0 +1,103 @@
+//! The correspondence arguments that `morphkit transfer` and `morphkit rig` share: markers
+//! (the correspondence is computed first) or a correspondence file, how matched gradients
+//! combine, and the optional closest-point refinement.
+
+use super::correspond::{print_summary, summary};
+use anyhow::{bail, Context};
+use morphkit::transfer::{
+    correspond, Correspondence, CorrespondenceOptions, GradientCombine, Markers, RefineOptions,
+};
+use morphkit::TriMesh;
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Where the correspondence comes from, and how it is used.
+#[derive(clap::Args, Debug)]
+pub struct CorrespondenceArgs {
+    /// Marker pairs (computes the correspondence first).
+    #[arg(long, value_name = "JSON", conflicts_with = "correspondence")]
+    pub markers: Option<PathBuf>,
+    /// A correspondence written by `morphkit correspond`.
+    #[arg(long, value_name = "JSON")]
+    pub correspondence: Option<PathBuf>,
+    /// How gradients of several matched source triangles combine: inverse-distance (weights
+    /// 1/d; exact on a mesh onto itself), mean, or nearest.
+    #[arg(long, default_value = "inverse-distance", value_parser = ["inverse-distance", "mean", "nearest"])]
+    pub combine: String,
+    /// With --markers: refine the correspondence by closest points (Sumner & Popović 2004,
+    /// Sec. 5) before matching.
+    #[arg(long)]
+    pub refine: bool,
+}
+
+/// A correspondence obtained from [`CorrespondenceArgs`].
+pub struct Obtained {
+    pub correspondence: Correspondence,
+    /// With --markers: the markers and options it was computed with (for a way back).
+    pub computed_from: Option<(Markers, CorrespondenceOptions)>,
+}
+
+impl CorrespondenceArgs {
+    /// Refuses a command line with neither source of a correspondence.
+    pub fn require(&self) -> anyhow::Result<()> {
+        if self.markers.is_none() && self.correspondence.is_none() {
+            bail!(
+                "give --markers JSON (marker pairs; the correspondence is computed first) or \
+                 --correspondence JSON (a file written by morphkit correspond)"
+            );
+        }
+        Ok(())
+    }
+
+    /// The input files these arguments name (none is ever written).
+    pub fn inputs(&self) -> impl Iterator<Item = PathBuf> + '_ {
+        self.markers.iter().chain(&self.correspondence).cloned()
+    }
+
+    /// `--combine` as the library's option.
+    pub fn combine(&self) -> GradientCombine {
+        match self.combine.as_str() {
+            "nearest" => GradientCombine::Nearest,
+            "mean" => GradientCombine::Mean,
+            _ => GradientCombine::InverseDistance,
+        }
+    }
+
+    /// Computes the correspondence from `source` to `target` (with --markers) or reads it, and
+    /// records how in `report["correspondence"]`.
+    pub fn obtain(
+        &self,
+        source: &TriMesh,
+        target: &TriMesh,
+        report: &mut serde_json::Value,
+    ) -> anyhow::Result<Obtained> {
+        self.require()?;
+        if let Some(m) = &self.markers {
+            let markers = Markers::read(m)?;
+            crate::util::announce_work("computing the correspondence", target.num_vertices());
+            let t0 = Instant::now();
+            let copts = CorrespondenceOptions {
+                refine: self.refine.then(RefineOptions::default),
+                ..Default::default()
+            };
+            let r = correspond(source, target, &markers, &copts).context("correspondence")?;
+            let secs = t0.elapsed().as_secs_f64();
+            print_summary(&r, secs);
+            report["correspondence"] = summary(&r, secs);
+            return Ok(Obtained {
+                correspondence: r.correspondence,
+                computed_from: Some((markers, copts)),
+            });
+        }
+        let c = self.correspondence.as_ref().expect("checked by require");
+        let text = std::fs::read_to_string(c)
+            .with_context(|| format!("{}: cannot read the correspondence", c.display()))?;
+        let corr = Correspondence::from_json(&text).with_context(|| format!("{}", c.display()))?;
+        report["correspondence"] = json!({ "file": c, "seconds": 0.0 });
+        Ok(Obtained {
+            correspondence: corr,
+            computed_from: None,
+        })
+    }
+}
