@@ -364,27 +364,25 @@ impl Cholesky {
     /// Solves $A x = b$ in place for one right-hand side, with no allocation.
     pub fn solve_one(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
         self.check_rhs(rhs, 1)?;
-        let n = self.pattern.n();
         let stack = MemStack::new(&mut self.solve_scratch);
-        if self.precision == Precision::Single {
-            let llt = LltRef::new(&self.symbolic, self.l_single.as_slice());
-            let work = self.rhs_single.as_mut_slice();
-            for (w, r) in work.iter_mut().zip(rhs.iter()) {
-                *w = *r as f32;
-            }
-            let mat = MatMut::from_column_major_slice_mut(work, n, 1);
-            llt.solve_in_place_with_conj(Conj::No, mat, Par::Seq, stack);
-            for (r, w) in rhs.iter_mut().zip(work.iter()) {
-                *r = f64::from(*w);
-            }
-            return Ok(());
+        match self.precision {
+            Precision::Single => solve_stored(
+                &self.symbolic,
+                self.l_single.as_slice(),
+                self.rhs_single.as_mut_slice(),
+                rhs,
+                1,
+                stack,
+            ),
+            Precision::Double => solve_stored(
+                &self.symbolic,
+                self.l_values.as_slice(),
+                self.rhs_scratch.as_mut_slice(),
+                rhs,
+                1,
+                stack,
+            ),
         }
-        let llt = LltRef::new(&self.symbolic, self.l_values.as_slice());
-        let work = self.rhs_scratch.as_mut_slice();
-        work.copy_from_slice(rhs);
-        let mat = MatMut::from_column_major_slice_mut(work, n, 1);
-        llt.solve_in_place_with_conj(Conj::No, mat, Par::Seq, stack);
-        rhs.copy_from_slice(work);
         Ok(())
     }
 
@@ -442,35 +440,22 @@ impl Cholesky {
             });
         }
         let stack = MemStack::new(&mut self.factor_scratch);
-        let res = if self.precision == Precision::Single {
-            for (a, v) in self.a_single.iter_mut().zip(values) {
-                *a = *v as f32;
+        let a = self.pattern.symbolic();
+        let res = match self.precision {
+            Precision::Single => {
+                for (a, v) in self.a_single.iter_mut().zip(values) {
+                    *a = *v as f32;
+                }
+                let l = self.l_single.as_mut_slice();
+                factor_stored(&self.symbolic, a, &self.a_single, l, stack)
             }
-            let a = SparseColMatRef::new(self.pattern.symbolic(), &self.a_single[..]);
-            self.symbolic
-                .factorize_numeric_llt::<f32>(
-                    self.l_single.as_mut_slice(),
-                    a,
-                    Side::Lower,
-                    Default::default(),
-                    Par::Seq,
-                    stack,
-                    Spec::default(),
-                )
-                .map(|_| ())
-        } else {
-            let a = SparseColMatRef::new(self.pattern.symbolic(), values);
-            self.symbolic
-                .factorize_numeric_llt::<f64>(
-                    self.l_values.as_mut_slice(),
-                    a,
-                    Side::Lower,
-                    Default::default(),
-                    Par::Seq,
-                    stack,
-                    Spec::default(),
-                )
-                .map(|_| ())
+            Precision::Double => factor_stored(
+                &self.symbolic,
+                a,
+                values,
+                self.l_values.as_mut_slice(),
+                stack,
+            ),
         };
         match res {
             Ok(_) => {
@@ -489,32 +474,26 @@ impl Cholesky {
     /// Solves $A X = B$ in place for `ncols` right-hand sides stored column-major in `rhs`
     /// (`n × ncols`).
     pub fn solve_in_place(&self, rhs: &mut [f64], ncols: usize) -> Result<(), SolveError> {
-        let n = self.pattern.n();
         self.check_rhs(rhs, ncols)?;
         let oom = || SolveError::Backend("out of memory".into());
-        if self.precision == Precision::Single {
-            let req = self.symbolic.solve_in_place_scratch::<f32>(ncols, Par::Seq);
-            let mut buf = MemBuffer::try_new(req).map_err(|_| oom())?;
-            let llt = LltRef::new(&self.symbolic, self.l_single.as_slice());
-            let mut work = Aligned::<f32>::new(rhs.len()).ok_or_else(oom)?;
-            for (w, r) in work.as_mut_slice().iter_mut().zip(rhs.iter()) {
-                *w = *r as f32;
+        match self.precision {
+            Precision::Single => {
+                let req = self.symbolic.solve_in_place_scratch::<f32>(ncols, Par::Seq);
+                let mut buf = MemBuffer::try_new(req).map_err(|_| oom())?;
+                let mut work = Aligned::<f32>::new(rhs.len()).ok_or_else(oom)?;
+                let l = self.l_single.as_slice();
+                let stack = MemStack::new(&mut buf);
+                solve_stored(&self.symbolic, l, work.as_mut_slice(), rhs, ncols, stack);
             }
-            let mat = MatMut::from_column_major_slice_mut(work.as_mut_slice(), n, ncols);
-            llt.solve_in_place_with_conj(Conj::No, mat, Par::Seq, MemStack::new(&mut buf));
-            for (r, w) in rhs.iter_mut().zip(work.as_slice()) {
-                *r = f64::from(*w);
+            Precision::Double => {
+                let req = self.symbolic.solve_in_place_scratch::<f64>(ncols, Par::Seq);
+                let mut buf = MemBuffer::try_new(req).map_err(|_| oom())?;
+                let mut work = Aligned::<f64>::new(rhs.len()).ok_or_else(oom)?;
+                let l = self.l_values.as_slice();
+                let stack = MemStack::new(&mut buf);
+                solve_stored(&self.symbolic, l, work.as_mut_slice(), rhs, ncols, stack);
             }
-            return Ok(());
         }
-        let req = self.symbolic.solve_in_place_scratch::<f64>(ncols, Par::Seq);
-        let mut buf = MemBuffer::try_new(req).map_err(|_| oom())?;
-        let llt = LltRef::new(&self.symbolic, self.l_values.as_slice());
-        let mut work = Aligned::<f64>::new(rhs.len()).ok_or_else(oom)?;
-        work.as_mut_slice().copy_from_slice(rhs);
-        let mat = MatMut::from_column_major_slice_mut(work.as_mut_slice(), n, ncols);
-        llt.solve_in_place_with_conj(Conj::No, mat, Par::Seq, MemStack::new(&mut buf));
-        rhs.copy_from_slice(work.as_slice());
         Ok(())
     }
 
@@ -523,6 +502,73 @@ impl Cholesky {
         let mut x = b.to_vec();
         self.solve_in_place(&mut x, 1)?;
         Ok(x)
+    }
+}
+
+/// A factor's arithmetic: `f64` right-hand sides are rounded into it and back.
+trait Stored: faer::traits::ComplexField + Copy {
+    fn from_f64(x: f64) -> Self;
+    fn to_f64(self) -> f64;
+}
+
+impl Stored for f32 {
+    fn from_f64(x: f64) -> Self {
+        x as f32
+    }
+    fn to_f64(self) -> f64 {
+        f64::from(self)
+    }
+}
+
+impl Stored for f64 {
+    fn from_f64(x: f64) -> Self {
+        x
+    }
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+/// Numeric factorization of the matrix `values` (pattern `a`) into `l`.
+fn factor_stored<T: Stored>(
+    symbolic: &SymbolicCholesky<usize>,
+    a: SymbolicSparseColMatRef<'_, usize>,
+    values: &[T],
+    l: &mut [T],
+    stack: &mut MemStack,
+) -> Result<(), DenseLltError> {
+    let a = SparseColMatRef::new(a, values);
+    symbolic
+        .factorize_numeric_llt::<T>(
+            l,
+            a,
+            Side::Lower,
+            Default::default(),
+            Par::Seq,
+            stack,
+            Spec::default(),
+        )
+        .map(|_| ())
+}
+
+/// Solves with the factor values `l` for the `ncols` right-hand sides in `rhs`, through the
+/// (aligned) buffer `work` of the factor's arithmetic.
+fn solve_stored<T: Stored>(
+    symbolic: &SymbolicCholesky<usize>,
+    l: &[T],
+    work: &mut [T],
+    rhs: &mut [f64],
+    ncols: usize,
+    stack: &mut MemStack,
+) {
+    for (w, r) in work.iter_mut().zip(rhs.iter()) {
+        *w = T::from_f64(*r);
+    }
+    let n = rhs.len() / ncols.max(1);
+    let mat = MatMut::from_column_major_slice_mut(work, n, ncols);
+    LltRef::new(symbolic, l).solve_in_place_with_conj(Conj::No, mat, Par::Seq, stack);
+    for (r, w) in rhs.iter_mut().zip(work.iter()) {
+        *r = w.to_f64();
     }
 }
 

@@ -53,10 +53,16 @@ impl Workspace {
 
     /// The factor the current solve uses.
     pub fn factor(&mut self) -> &mut Cholesky {
-        match (&mut self.double, self.use_double) {
+        self.parts().0
+    }
+
+    /// The factor the current solve uses, beside the projected and exact Hessian values.
+    fn parts(&mut self) -> (&mut Cholesky, &mut Vec<f64>, &Vec<f64>) {
+        let chol = match (&mut self.double, self.use_double) {
             (Some(d), true) => d,
             _ => &mut self.chol,
-        }
+        };
+        (chol, &mut self.projected, &self.exact)
     }
 }
 
@@ -126,11 +132,7 @@ impl Problem<'_> {
             }
             added = shift;
             stats.factorizations += 1;
-            let values = &ws.projected;
-            let chol = match (&mut ws.double, ws.use_double) {
-                (Some(d), true) => d,
-                _ => &mut ws.chol,
-            };
+            let (chol, values, _) = ws.parts();
             match chol.factorize(values) {
                 Ok(()) => break Ok(()),
                 Err(SolveError::NotPositiveDefinite { .. }) if shift < 1e-2 * mean => {
@@ -223,11 +225,7 @@ pub(crate) fn trust_region(
             atol_max: 0.1 * prob.tolerance,
             max_iter: (prob.options.cg_iterations.max(1) * extend).min(400),
         };
-        let chol = match (&mut ws.double, ws.use_double) {
-            (Some(d), true) => d,
-            _ => &mut ws.chol,
-        };
-        let exact = &ws.exact;
+        let (chol, _, exact) = ws.parts();
         let mut op = |p: &[f64], out: &mut [f64]| sys.mul(exact, p, out);
         let mut pre = |r: &mut [f64]| chol.solve_one(r).is_ok();
         let result = steihaug(
