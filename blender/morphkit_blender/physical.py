@@ -109,12 +109,6 @@ def solver_for(obj, scene=None):
     return blend, F
 
 
-def predictor_for(obj, scene=None):
-    """The predictor of `obj`'s cached solver (built by `solver_for` if needed)."""
-    solver_for(obj, scene)
-    return _solvers[obj.name][3]
-
-
 def pulls_of(obj, scene):
     """Pull targets {vertex: object-space position} from the scene's pull objects."""
     inv = obj.matrix_world.inverted()
@@ -210,7 +204,7 @@ def _request(obj, scene):
         obj["morphkit_latency_ms"] = 1e3 * solve_into_key(obj, scene)
         return
     t0 = time.perf_counter()
-    _show(obj, predictor_for(obj, scene).predict(w), "preview")
+    _show(obj, _solvers[obj.name][3].predict(w), "preview")  # cached by solver_for above
     obj["morphkit_preview_ms"] = 1e3 * (time.perf_counter() - t0)
     _wanted[obj.name] = (state, blend, w, pulls)
     if obj.name not in _jobs:
