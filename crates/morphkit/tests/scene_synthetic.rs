@@ -330,6 +330,14 @@ fn bad_scenes_name_the_key_and_the_line() {
     let e = scene_error("unknown", "[[obstacle]]\nshape = \"sphere\"\nradiuss = 1\n");
     assert!(e.contains(":7:") && e.contains("radiuss"), "{e}");
 
+    let e = scene_error("interior", "[blend]\ninterior = \"voxels\"\n");
+    assert!(
+        e.contains(":6: blend.interior") && e.contains("unknown kind 'voxels'"),
+        "{e}"
+    );
+    let e = scene_error("anchor", "[blend]\nanchor = \"1,2\"\n");
+    assert!(e.contains(":6: blend.anchor") && e.contains("x,y,z"), "{e}");
+
     let e = scene_error("fixed", "[[pull]]\nvertex = 0\nposition = [0, 0, 0]\n");
     assert!(
         e.contains(":6: pull[0].vertex") && e.contains("fixed"),
@@ -345,6 +353,17 @@ fn a_scene_file_runs_and_resolves_paths_next_to_it() {
     std::fs::write(&path, format!("{HEAD}{body}")).unwrap();
     let scene = Scene::load(&path).unwrap();
     assert_eq!(scene.weights.len(), 3);
+    assert_eq!(scene.interior.mode, morphkit::springs::InteriorMode::None);
+    let with = dir.join("with-interior.toml");
+    std::fs::write(
+        &with,
+        format!("{HEAD}[blend]\ninterior = \"lattice,2\"\nanchor = \"auto\"\n"),
+    )
+    .unwrap();
+    let v = Scene::load(&with).unwrap();
+    assert_eq!(v.interior.mode, morphkit::springs::InteriorMode::Lattice);
+    assert_eq!(v.interior.density, 2.0);
+    assert_eq!(v.anchor.placement, morphkit::springs::AnchorPlacement::Auto);
     assert_eq!(scene.obstacles[0].name(), "ball");
     let mut s = scene.build().unwrap();
     let f = s.solve(2.0, &scene.weights[2]).unwrap();

@@ -313,7 +313,22 @@ fn a_hard_pull_moves_its_vertex_and_the_fixed_part_stays() {
         )
         .unwrap();
     assert!(r.stats.converged, "{:?}", r.stats);
-    assert!(dist(r.positions[corner as usize], goal) < 1e-5);
+    // A hard target is a boundary condition: the vertex sits exactly at its goal.
+    assert_eq!(r.positions[corner as usize], goal);
+    // A very stiff soft target pulls to (nearly) the same shape.
+    let stiff = PointTarget {
+        stiffness: 1e5,
+        ..PointTarget::hard(corner, goal)
+    };
+    assert!(!stiff.is_hard());
+    let soft = solver
+        .solve_with(&Weights::Alpha(0.5), &[stiff], None)
+        .unwrap();
+    assert!(soft.stats.converged, "{:?}", soft.stats);
+    let worst = (0..m.num_vertices())
+        .map(|v| dist(soft.positions[v], r.positions[v]))
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-3, "stiff soft target vs hard: {worst}");
     for &v in &fixed {
         assert_eq!(r.positions[v as usize], m.positions[v as usize]);
     }

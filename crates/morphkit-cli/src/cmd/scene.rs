@@ -135,6 +135,7 @@ pub fn run(scene_path: &Path, out: &Path, report: Option<&Path>) -> anyhow::Resu
             "triangles": scene.shapes.triangles().len(),
             "obstacles": scene.obstacles.iter().map(|o| o.name().to_string()).collect::<Vec<_>>(),
             "pulls": scene.pulls.len(),
+            "interior": solver.interior_report(),
             "penetration_tolerance": solver.tolerance(),
             "unresolved_frames": unresolved,
             "unconverged_frames": unconverged,

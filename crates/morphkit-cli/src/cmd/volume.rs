@@ -21,64 +21,22 @@ use morphkit::io::{self, FramesOptions};
 use morphkit::mesh::{ShapeSet, Topology};
 use morphkit::springs::interior::VolumeResult;
 use morphkit::springs::{
-    blend_metrics, AnchorOptions, AnchorPlacement, BlendOptions, InteriorMode, InteriorOptions,
-    VolumetricBlend, Weights,
+    blend_metrics, AnchorOptions, BlendOptions, InteriorOptions, VolumetricBlend, Weights,
 };
 use serde_json::json;
 use std::time::Instant;
 
 /// Parses `--interior none|lattice|tetgen[,density]`.
 pub fn parse_interior(spec: &str) -> anyhow::Result<InteriorOptions> {
-    let mut parts = spec.split(',');
-    let mode = match parts.next().unwrap_or("").trim() {
-        "none" => InteriorMode::None,
-        "lattice" => InteriorMode::Lattice,
-        "tetgen" => InteriorMode::Tetgen,
-        other => bail!("--interior: unknown kind '{other}'; use none, lattice or tetgen, optionally followed by ,density"),
-    };
-    let mut o = InteriorOptions {
-        mode,
-        ..Default::default()
-    };
-    if let Some(d) = parts.next() {
-        o.density = d
-            .trim()
-            .parse()
-            .with_context(|| format!("--interior: density '{d}' is not a number"))?;
-        if !(o.density.is_finite() && o.density > 0.0) {
-            bail!("--interior: the density must be positive, got {d}");
-        }
-    }
-    if parts.next().is_some() {
-        bail!("--interior takes KIND[,density], got '{spec}'");
-    }
-    Ok(o)
+    InteriorOptions::parse(spec).map_err(|e| anyhow::anyhow!("--interior: {e}"))
 }
 
 /// Parses `--anchor auto|x,y,z[,size]`.
 pub fn parse_anchor(spec: Option<&str>) -> anyhow::Result<AnchorOptions> {
-    let placement = match spec.map(str::trim) {
-        None => AnchorPlacement::None,
-        Some("auto") => AnchorPlacement::Auto,
-        Some(s) => {
-            let v: Vec<f64> = s
-                .split(',')
-                .map(|x| x.trim().parse::<f64>())
-                .collect::<Result<_, _>>()
-                .with_context(|| format!("--anchor: '{s}' is not auto or x,y,z[,size]"))?;
-            if !(v.len() == 3 || v.len() == 4) || v.iter().any(|x| !x.is_finite()) {
-                bail!("--anchor takes auto or x,y,z[,size] (finite numbers), got '{s}'");
-            }
-            AnchorPlacement::At {
-                center: [v[0], v[1], v[2]],
-                size: v.get(3).copied(),
-            }
-        }
-    };
-    Ok(AnchorOptions {
-        placement,
-        ..Default::default()
-    })
+    match spec {
+        None => Ok(AnchorOptions::default()),
+        Some(s) => AnchorOptions::parse(s).map_err(|e| anyhow::anyhow!("--anchor: {e}")),
+    }
 }
 
 /// True when the volumetric path is asked for.
@@ -211,6 +169,7 @@ pub fn run(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use morphkit::springs::{AnchorPlacement, InteriorMode};
 
     #[test]
     fn flags_parse_and_bad_ones_are_refused() {

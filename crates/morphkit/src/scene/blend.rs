@@ -6,13 +6,21 @@ use super::obstacle::Obstacle;
 use super::pulls::{Pull, PullKind};
 use super::SceneError;
 use crate::mesh::{bbox_diagonal, Point, ShapeSet};
-use crate::springs::{BlendOptions, BlendPredictor, FrameStats, PhysicalBlend, Weights};
+use crate::springs::interior::anchor::apply_inverse;
+use crate::springs::interior::{AnchorMotion, InteriorReport};
+use crate::springs::{
+    AnchorOptions, AnchorPlacement, BlendOptions, BlendPredictor, FrameStats, InteriorMode,
+    InteriorOptions, PhysicalBlend, VolumetricBlend, Weights,
+};
 
 /// One blended frame of a scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneFrame {
-    /// Vertex positions, `#V`.
+    /// Vertex positions, `#V` (the surface).
     pub positions: Vec<Point>,
+    /// Interior then anchor vertex positions, world coordinates (empty without an interior or
+    /// an anchor).
+    pub extra: Vec<Point>,
     /// Solver statistics of the last equilibrium solve of the frame.
     pub solver: FrameStats,
     /// The vertices held on obstacles, by vertex id.
@@ -27,6 +35,12 @@ pub struct SceneFrame {
 #[derive(Debug)]
 pub struct SceneBlend {
     solver: PhysicalBlend,
+    /// Surface vertices (the input's); the solver's interior and anchor vertices follow.
+    surface_vertices: usize,
+    /// The anchor's blended motion (solver frame → world), when anchored.
+    motion: Option<AnchorMotion>,
+    /// What the volumetric set-up built, when there is an interior or an anchor.
+    interior: Option<InteriorReport>,
     obstacles: Vec<Obstacle>,
     pulls: Vec<Pull>,
     options: CollisionOptions,
@@ -53,6 +67,23 @@ impl SceneBlend {
         pulls: Vec<Pull>,
         options: &CollisionOptions,
     ) -> Result<Self, SceneError> {
+        let none = (InteriorOptions::default(), AnchorOptions::default());
+        Self::with_interior(shapes, blend, &none.0, &none.1, obstacles, pulls, options)
+    }
+
+    /// As [`new`](Self::new), on the [`VolumetricBlend`] with internal springs and an anchor
+    /// (Ma et al. Sec. 3.1, 3.4) when `interior` or `anchor` asks for one. Only surface
+    /// vertices can be pulled or become contacts; with an anchor the solve runs in the
+    /// anchor's frame, and obstacles and pulls are mapped into it.
+    pub fn with_interior(
+        shapes: &ShapeSet,
+        blend: &BlendOptions,
+        interior: &InteriorOptions,
+        anchor: &AnchorOptions,
+        obstacles: Vec<Obstacle>,
+        pulls: Vec<Pull>,
+        options: &CollisionOptions,
+    ) -> Result<Self, SceneError> {
         if !(options.tolerance.is_finite() && options.tolerance > 0.0) {
             return Err(crate::springs::BlendError::InvalidOption(format!(
                 "the collision tolerance must be finite and positive, got {}",
@@ -60,14 +91,23 @@ impl SceneBlend {
             ))
             .into());
         }
-        let solver = PhysicalBlend::new(shapes, blend)?;
+        let volumetric =
+            interior.mode != InteriorMode::None || anchor.placement != AnchorPlacement::None;
+        let (solver, motion, report) = if volumetric {
+            let (s, m, r) = VolumetricBlend::new(shapes, blend, interior, anchor)?.into_parts();
+            (s, m, Some(r))
+        } else {
+            (PhysicalBlend::new(shapes, blend)?, None, None)
+        };
         let n = shapes.num_vertices();
         let constraints = solver.constraints();
-        let mut fixed = vec![false; n];
+        // Over the solver's vertices: the surface, then any interior and anchor vertices.
+        let n_all = solver.shapes().num_vertices();
+        let mut fixed = vec![false; n_all];
         for &v in &constraints.fixed {
             fixed[v as usize] = true;
         }
-        let mut gauged = vec![false; n];
+        let mut gauged = vec![false; n_all];
         for g in &constraints.gauges {
             for &v in &g.vertices {
                 gauged[v as usize] = true;
@@ -113,6 +153,9 @@ impl SceneBlend {
         let tolerance = options.tolerance * bbox_diagonal(shapes.positions(0));
         Ok(Self {
             solver,
+            surface_vertices: n,
+            motion,
+            interior: report,
             obstacles,
             pulls,
             options: options.clone(),
@@ -124,7 +167,21 @@ impl SceneBlend {
     /// The frame at frame number `frame` (it places the obstacles and the pulls) with
     /// `weights`. Frames do not depend on each other.
     pub fn solve(&mut self, frame: f64, weights: &Weights) -> Result<SceneFrame, SceneError> {
-        let targets: Vec<_> = self.pulls.iter().map(|p| p.target_at(frame)).collect();
+        let motion = match &self.motion {
+            Some(m) => Some(m.at(&weights.coefficients(self.solver.shapes().len())?)),
+            None => None,
+        };
+        let targets: Vec<_> = self
+            .pulls
+            .iter()
+            .map(|p| {
+                let mut t = p.target_at(frame);
+                if let Some(m) = &motion {
+                    t.position = apply_inverse(m, t.position);
+                }
+                t
+            })
+            .collect();
         let placed: Vec<_> = self.obstacles.iter().map(|o| o.placed(frame)).collect();
         let (result, contacts, collision) = solve_frame(
             &mut self.solver,
@@ -134,16 +191,29 @@ impl SceneBlend {
             &self.candidates,
             &self.options,
             self.tolerance,
+            motion.as_ref(),
         )?;
+        let mut positions = result.positions;
+        if let Some(m) = &motion {
+            positions.iter_mut().for_each(|p| *p = m.apply(*p));
+        }
+        let extra = positions.split_off(self.surface_vertices);
         Ok(SceneFrame {
-            positions: result.positions,
+            positions,
+            extra,
             solver: result.stats,
             contacts,
             collision,
         })
     }
 
-    /// The predictor of the underlying blend (no obstacles, no pulls): a preview for UIs.
+    /// What the interior and anchor set-up built ([`with_interior`](Self::with_interior)).
+    pub fn interior_report(&self) -> Option<&InteriorReport> {
+        self.interior.as_ref()
+    }
+
+    /// The predictor of the underlying blend (no obstacles, no pulls): a preview for UIs. With
+    /// an interior or an anchor it is that of the extended system, in the anchor's frame.
     pub fn predictor(&self) -> BlendPredictor {
         self.solver.predictor()
     }

@@ -13,10 +13,12 @@
 //!    (`tolerance` × the base's bounding-box diagonal), or `max_rounds` re-solves were done, or
 //!    no new vertex can be held, stop; otherwise every newly penetrating candidate becomes a
 //!    hard [`PointTarget`] at $q_v$ (contacts of earlier rounds of the same frame stay), and
-//!    round $r + 1$ solves again from $x^r$. (Starting with the new contacts snapped to $q_v$
-//!    was tried: it strains their rings and took 12 Newton iterations and 3 rejected steps
-//!    on the 18k-vertex benchmark, against 9 and none from $x^r$, where the first Newton step
-//!    moves each contact and its neighbourhood together.)
+//!    round $r + 1$ solves again from $x^r$ with every contact placed at its $q_v$ and held
+//!    there exactly (a boundary condition, not a penalty; see [`PointTarget::is_hard`]).
+//!    On the 18k-vertex benchmark (`morphkit bench --suite scene`) that round takes 6 Newton
+//!    steps and 24 inner CG iterations; the stiff penalty used before took 7 and 96 (its
+//!    residuals were dominated by the penalty's stiffness), and one penalized Newton step
+//!    before holding (a smooth first displacement of each contact's neighbourhood) took 7.
 //!
 //! Contacts are found afresh for every frame and never carried over from another frame, so a
 //! frame remains a function of its weights, its pulls and its obstacle poses alone (frame order
@@ -25,7 +27,9 @@
 //! reported only; no decision depends on them.
 
 use super::obstacle::Placed;
+use crate::geom::RigidTransform;
 use crate::mesh::Point;
+use crate::springs::interior::anchor::apply_inverse;
 use crate::springs::{BlendError, BlendResult, PhysicalBlend, PointTarget, Weights};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -125,6 +129,10 @@ pub(crate) struct Candidates {
 }
 
 /// Solves one frame with pulls `pulls` and the obstacles `placed`; see the [module docs](self).
+/// `frame` maps the solver's coordinates to the world (an anchored blend solves in the
+/// anchor's frame): `pulls` and the returned positions are in solver coordinates, obstacles
+/// and contacts in the world.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_frame(
     solver: &mut PhysicalBlend,
     weights: &Weights,
@@ -133,6 +141,7 @@ pub(crate) fn solve_frame(
     candidates: &Candidates,
     options: &CollisionOptions,
     tolerance: f64,
+    frame: Option<&RigidTransform>,
 ) -> Result<(BlendResult, Vec<Contact>, CollisionStats), BlendError> {
     let mut stats = CollisionStats {
         tolerance,
@@ -146,10 +155,13 @@ pub(crate) fn solve_frame(
     let mut targets = pulls.to_vec();
     loop {
         let t = Instant::now();
-        let hits = if placed.is_empty() {
-            Vec::new()
-        } else {
-            detect(placed, &candidates.surface, &result.positions)
+        let hits = match (placed.is_empty(), frame) {
+            (true, _) => Vec::new(),
+            (false, None) => detect(placed, &candidates.surface, &result.positions),
+            (false, Some(t)) => {
+                let world: Vec<Point> = result.positions.iter().map(|&p| t.apply(p)).collect();
+                detect(placed, &candidates.surface, &world)
+            }
         };
         stats.detection_seconds += t.elapsed().as_secs_f64();
         stats.max_penetration = hits.iter().map(|(_, h)| h.depth).fold(0.0, f64::max);
@@ -171,7 +183,8 @@ pub(crate) fn solve_frame(
                     depth: h.depth,
                 },
             );
-            targets.push(PointTarget::hard(v, h.surface));
+            let held = frame.map_or(h.surface, |t| apply_inverse(t, h.surface));
+            targets.push(PointTarget::hard(v, held));
             added += 1;
         }
         if added == 0 {

@@ -78,6 +78,9 @@ pub enum SceneError {
     /// The blend failed.
     #[error(transparent)]
     Blend(#[from] BlendError),
+    /// The interior or the anchor could not be built.
+    #[error(transparent)]
+    Interior(#[from] crate::springs::interior::InteriorError),
 }
 
 /// 1-based line and column of byte `offset` in `text`.

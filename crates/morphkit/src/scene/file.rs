@@ -50,6 +50,8 @@ pub(crate) struct BlendSpec {
     pub kinematic_stretch: Option<f64>,
     pub tolerance: Option<f64>,
     pub max_newton_iterations: Option<usize>,
+    pub interior: Option<Spanned<String>>,
+    pub anchor: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize, Debug, Default)]

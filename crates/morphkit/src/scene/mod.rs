@@ -11,9 +11,12 @@
 //!   and the key.
 //!
 //! Pulls and contacts are [`PointTarget`](crate::springs::PointTarget)s of
-//! [`PhysicalBlend::solve_with`](crate::springs::PhysicalBlend::solve_with): diagonal Hessian
-//! blocks only, so they change every frame and every collision round without a new symbolic
-//! analysis.
+//! [`PhysicalBlend::solve_with`](crate::springs::PhysicalBlend::solve_with): hard ones are
+//! boundary conditions held exactly, soft ones diagonal Hessian blocks, so either changes every
+//! frame and every collision round without a new symbolic analysis. A scene can also carry the
+//! internal springs and the anchor of [`VolumetricBlend`](crate::springs::VolumetricBlend)
+//! ([`SceneBlend::with_interior`]): interior vertices are never contacts, and with an anchor
+//! obstacles and pulls are mapped into the anchor's frame for the solve and back.
 
 mod blend;
 mod collide;

@@ -408,7 +408,29 @@ impl Placed<'_> {
         }
         let proj = self.shape.project_point(&self.pose, v, false);
         let depth = (proj.point - v).length();
-        (proj.is_inside && depth > 0.0).then(|| (to_point(proj.point), depth))
+        if depth > 0.0 && depth.is_finite() {
+            return proj.is_inside.then(|| (to_point(proj.point), depth));
+        }
+        // A degenerate projection: the point is its own projection (on the surface, or where
+        // every direction is closest, as at a ball's centre) or the projection is not finite.
+        // Inside points then take the projection of a nearby point, offset by a billionth of
+        // the box along +x, +y, +z in turn, so that a vertex at an obstacle's centre is still
+        // found, deterministically. A point on the surface stays no hit: the surface it finds
+        // is not farther than the offset.
+        if !self.shape.contains_point(&self.pose, v) {
+            return None;
+        }
+        let step = 1e-9 * (hi - lo).length().max(f64::MIN_POSITIVE);
+        [Vector::X, Vector::Y, Vector::Z]
+            .into_iter()
+            .find_map(|axis| {
+                let q = self
+                    .shape
+                    .project_point(&self.pose, v + axis * step, false)
+                    .point;
+                let depth = (q - v).length();
+                (depth > 2.0 * step && depth.is_finite()).then(|| (to_point(q), depth))
+            })
     }
 
     /// Distance from `p` to the obstacle's surface (whether inside or outside).
@@ -432,6 +454,27 @@ impl Placed<'_> {
 mod tests {
     use super::*;
     use crate::mesh::generate;
+
+    #[test]
+    fn a_point_at_a_ball_centre_is_inside_and_a_surface_point_is_not() {
+        let s = Obstacle::primitive("s", &Primitive::Sphere { radius: 0.5 }, 1.0)
+            .unwrap()
+            .with_keys(vec![RigidKey {
+                frame: 0.0,
+                translation: [1.0, 2.0, 3.0],
+                rotation: Rotation::IDENTITY,
+            }])
+            .unwrap();
+        let placed = s.placed(0.0);
+        let (q, depth) = placed
+            .penetration([1.0, 2.0, 3.0])
+            .expect("the centre is inside");
+        assert!((depth - 0.5).abs() < 1e-12, "depth {depth}");
+        let r = ((q[0] - 1.0).powi(2) + (q[1] - 2.0).powi(2) + (q[2] - 3.0).powi(2)).sqrt();
+        assert!((r - 0.5).abs() < 1e-12, "surface point at {r}");
+        assert!(placed.penetration([1.5, 2.0, 3.0]).is_none());
+        assert!(placed.penetration([1.0, 2.0, 3.6]).is_none());
+    }
 
     #[test]
     fn primitives_report_inside_points_with_their_surface_point() {

@@ -3,8 +3,8 @@
 //!
 //! Each pull becomes one [`PointTarget`] per frame, $E = \tfrac12 \kappa \lVert x_v - p(f)
 //! \rVert^2$ with $p(f)$ the keyed position linearly interpolated at frame $f$ (held before the
-//! first and after the last key). Hard: $\kappa$ = [`PointTarget::HARD_STIFFNESS`] × the mean
-//! spring stiffness, the vertex then sits at $p(f)$ within about `1e-8` of the forces on it.
+//! first and after the last key). Hard: a boundary condition ([`PointTarget::hard`]), the vertex
+//! is placed exactly at $p(f)$ and held there while its neighbourhood is solved for.
 //! Soft: $\kappa$ = `stiffness` × the mean spring stiffness (`1` pulls like one more edge).
 
 use super::keys::{bracket, first_out_of_order, lerp};

@@ -13,6 +13,9 @@
 //!
 //! [blend]                                # all optional; defaults as in `morphkit blend`
 //! fixed = "auto"                         # "auto", "none" or [vertex ids]
+//! # interior = "lattice"                 # internal springs: "none", "lattice" or "tetgen",
+//! #                                      #   optionally ",density" (as `blend --interior`)
+//! # anchor = "auto"                      # the rigid anchor: "auto" or "x,y,z[,size]"
 //! # k0, bending, hinge_weight, kinematic_stretch, tolerance, max_newton_iterations
 //!
 //! [collision]
@@ -53,7 +56,7 @@ use super::pulls::{Pull, PullKey, PullKind};
 use super::{CollisionOptions, SceneBlend};
 use crate::io;
 use crate::mesh::{bbox_diagonal, ShapeSet};
-use crate::springs::{BlendOptions, FixedVertices, Weights};
+use crate::springs::{AnchorOptions, BlendOptions, FixedVertices, InteriorOptions, Weights};
 use parry3d_f64::math::{Rotation, Vector};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -75,6 +78,10 @@ pub struct Scene {
     pub weights: Vec<Weights>,
     /// Options of the physical blend.
     pub blend: BlendOptions,
+    /// Internal springs (`blend.interior`; default none).
+    pub interior: InteriorOptions,
+    /// The anchor (`blend.anchor`; default none).
+    pub anchor: AnchorOptions,
     /// Options of collision handling.
     pub collision: CollisionOptions,
     /// The obstacles, in file order.
@@ -168,6 +175,16 @@ impl Scene {
             .map_err(|e| ctx.invalid(f.targets.span(), "targets", e.to_string()))?;
         let weights = weights(&ctx, &f.weights, shapes.len())?;
         let blend = blend_options(&ctx, &f)?;
+        let interior = match &f.blend.interior {
+            None => InteriorOptions::default(),
+            Some(v) => InteriorOptions::parse(v.get_ref())
+                .map_err(|e| ctx.invalid(v.span(), "blend.interior", e))?,
+        };
+        let anchor = match &f.blend.anchor {
+            None => AnchorOptions::default(),
+            Some(v) => AnchorOptions::parse(v.get_ref())
+                .map_err(|e| ctx.invalid(v.span(), "blend.anchor", e))?,
+        };
         let collision = CollisionOptions {
             tolerance: f.collision.tolerance.unwrap_or(1e-4),
             max_rounds: f.collision.max_rounds.unwrap_or(10),
@@ -200,6 +217,8 @@ impl Scene {
             inputs,
             weights,
             blend,
+            interior,
+            anchor,
             collision,
             obstacles,
             pulls,
@@ -211,9 +230,11 @@ impl Scene {
     /// Builds the solver; pull problems found there (a fixed vertex, a free component, a
     /// vertex pulled twice) name the pull's line and key.
     pub fn build(&self) -> Result<SceneBlend, SceneError> {
-        SceneBlend::new(
+        SceneBlend::with_interior(
             &self.shapes,
             &self.blend,
+            &self.interior,
+            &self.anchor,
             self.obstacles.clone(),
             self.pulls.clone(),
             &self.collision,

@@ -8,7 +8,7 @@ use super::options::{BlendOptions, BlendResult, FrameStats, LinearSolver, RigSum
 use super::rotation_predictor::RotationPredictor;
 use super::system::{expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem};
 use super::terms::{
-    BlockHessian, BlockPattern, EnergyTerm, HingeTerm, PointTarget, PointTerm, SpringTerm,
+    BlockHessian, BlockPattern, EnergyTerm, Held, HingeTerm, PointTarget, PointTerm, SpringTerm,
     TermParameters,
 };
 use super::{
@@ -472,29 +472,35 @@ impl Rig {
                 "the start positions must have one point per vertex".into(),
             ));
         }
+        let n = self.shapes.num_vertices();
+        let dof = &self.system.dof_index;
+        let held = Held::new(n, targets, |v| (0..3).all(|a| dof[3 * v + a] != u32::MAX));
+        let soft: Vec<PointTarget> = targets.iter().filter(|t| !t.is_hard()).copied().collect();
         let points = PointTerm {
-            targets,
+            targets: &soft,
             scale: self.mean_stiffness,
         };
         let mut terms: Vec<&dyn EnergyTerm> = self.terms.iter().map(|t| t.as_ref()).collect();
         let mut params: Vec<TermParameters> = self.terms.iter().map(|t| t.prepare(&c)).collect();
-        if !targets.is_empty() {
+        if !soft.is_empty() {
             terms.push(&points);
             params.push(TermParameters::default());
         }
         let lin = predictor::linear(&self.shapes, &c);
         let mut x = self.start(&c, &lin, start_from);
-        let prob = Problem {
-            terms: &terms,
-            params: &params,
-            system: &self.system,
-            options: &self.options,
-            tolerance: self.tolerance,
-        };
         let mut stats = FrameStats {
             gradient_tolerance: self.tolerance,
             clamped_springs: params.iter().map(|p| p.clamped).sum(),
             ..Default::default()
+        };
+        held.place(&mut x);
+        let prob = Problem {
+            terms: &terms,
+            params: &params,
+            system: &self.system,
+            held: &held,
+            options: &self.options,
+            tolerance: self.tolerance,
         };
         let g = match self.options.linear_solver {
             LinearSolver::TrustRegion => trust_region(&prob, ws, &mut x, &mut stats)?,

@@ -17,7 +17,7 @@
 use super::options::{BlendOptions, FrameStats};
 use super::steihaug::{steihaug, StopRule, Termination};
 use super::system::FreeSystem;
-use super::terms::{total_gradient, BlockHessian, EnergyTerm, HessianKind, TermParameters};
+use super::terms::{total_gradient, BlockHessian, EnergyTerm, Held, HessianKind, TermParameters};
 use super::BlendError;
 use crate::sparse::{Cholesky, Precision, SolveError};
 
@@ -71,6 +71,8 @@ pub(crate) struct Problem<'a> {
     pub terms: &'a [&'a dyn EnergyTerm],
     pub params: &'a [TermParameters],
     pub system: &'a FreeSystem,
+    /// Vertices held at hard targets (boundary conditions of this solve only).
+    pub held: &'a Held,
     pub options: &'a BlendOptions,
     /// Absolute gradient tolerance.
     pub tolerance: f64,
@@ -78,7 +80,9 @@ pub(crate) struct Problem<'a> {
 
 impl Problem<'_> {
     fn gradient(&self, x: &[f64], g: &mut [f64]) -> f64 {
-        total_gradient(self.terms, self.params, x, g)
+        let e = total_gradient(self.terms, self.params, x, g);
+        self.held.mask_gradient(g);
+        e
     }
 
     /// Assembles the Hessian of `kind` at `x` into `out` (scalar free-coordinate values).
@@ -87,6 +91,7 @@ impl Problem<'_> {
         for (t, p) in self.terms.iter().zip(self.params) {
             t.add_hessian(p, x, kind, &mut ws.blocks);
         }
+        self.held.mask_hessian(&mut ws.blocks);
         let out = if exact_buf {
             &mut ws.exact
         } else {

@@ -101,6 +101,39 @@ impl Default for AnchorOptions {
 }
 
 impl InteriorOptions {
+    /// Parses `none|lattice|tetgen[,density]` (the `--interior` flag and the scene file's
+    /// `blend.interior`); other fields keep their defaults. The error says what is wrong.
+    pub fn parse(spec: &str) -> Result<Self, String> {
+        let mut parts = spec.split(',');
+        let mode = match parts.next().unwrap_or("").trim() {
+            "none" => InteriorMode::None,
+            "lattice" => InteriorMode::Lattice,
+            "tetgen" => InteriorMode::Tetgen,
+            other => {
+                return Err(format!(
+                    "unknown kind '{other}'; use none, lattice or tetgen, optionally followed by ,density"
+                ))
+            }
+        };
+        let mut o = Self {
+            mode,
+            ..Default::default()
+        };
+        if let Some(d) = parts.next() {
+            o.density = d
+                .trim()
+                .parse()
+                .map_err(|_| format!("density '{d}' is not a number"))?;
+            if !(o.density.is_finite() && o.density > 0.0) {
+                return Err(format!("the density must be positive, got {d}"));
+            }
+        }
+        if parts.next().is_some() {
+            return Err(format!("takes KIND[,density], got '{spec}'"));
+        }
+        Ok(o)
+    }
+
     pub(crate) fn check(&self) -> Result<(), super::InteriorError> {
         let bad = |what: &str, v: f64| {
             Err(super::InteriorError::InvalidOption(format!(
@@ -124,6 +157,34 @@ impl InteriorOptions {
 }
 
 impl AnchorOptions {
+    /// Parses `auto|x,y,z[,size]` (the `--anchor` flag and the scene file's `blend.anchor`);
+    /// other fields keep their defaults.
+    pub fn parse(spec: &str) -> Result<Self, String> {
+        let placement = match spec.trim() {
+            "auto" => AnchorPlacement::Auto,
+            s => {
+                let v: Vec<f64> = s
+                    .split(',')
+                    .map(|x| x.trim().parse::<f64>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| format!("'{s}' is not auto or x,y,z[,size]"))?;
+                if !(v.len() == 3 || v.len() == 4) || v.iter().any(|x| !x.is_finite()) {
+                    return Err(format!(
+                        "takes auto or x,y,z[,size] (finite numbers), got '{s}'"
+                    ));
+                }
+                AnchorPlacement::At {
+                    center: [v[0], v[1], v[2]],
+                    size: v.get(3).copied(),
+                }
+            }
+        };
+        Ok(Self {
+            placement,
+            ..Default::default()
+        })
+    }
+
     pub(crate) fn check(&self) -> Result<(), super::InteriorError> {
         if !(self.stiffness.is_finite() && self.stiffness > 0.0) {
             return Err(super::InteriorError::InvalidOption(format!(

@@ -216,6 +216,12 @@ impl VolumetricBlend {
         })
     }
 
+    /// The pieces a scene blend builds on: the blend of the extended set (in the anchor's
+    /// frame when anchored), the anchor's motion, and the report.
+    pub(crate) fn into_parts(self) -> (PhysicalBlend, Option<AnchorMotion>, InteriorReport) {
+        (self.blend, self.motion, self.report)
+    }
+
     /// What was built.
     pub fn report(&self) -> &InteriorReport {
         &self.report

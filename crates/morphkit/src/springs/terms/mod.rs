@@ -19,7 +19,7 @@ mod spring;
 
 pub use hinge::{HingeOptions, HingeTerm};
 pub use points::PointTarget;
-pub(crate) use points::PointTerm;
+pub(crate) use points::{Held, PointTerm};
 pub use spring::SpringTerm;
 
 /// A 3×3 block, row-major.
@@ -160,6 +160,10 @@ impl BlockHessian {
     }
     /// The pattern.
     pub fn pattern(&self) -> &BlockPattern {
+        &self.pattern
+    }
+    /// The shared pattern.
+    pub(crate) fn pattern_arc(&self) -> &std::sync::Arc<BlockPattern> {
         &self.pattern
     }
     /// Sets every value to zero.
