@@ -87,6 +87,27 @@ pub fn shape_set(
     ShapeSet::new(mesh, named).py(Kind::Mesh)
 }
 
+/// `interior` and `anchor` as given to the constructors (`None`: none), parsed as the CLI's
+/// `--interior` and `--anchor`.
+pub(crate) fn volume_options(
+    interior: Option<&str>,
+    anchor: Option<&str>,
+) -> PyResult<(InteriorOptions, AnchorOptions)> {
+    let io = match interior {
+        None => InteriorOptions::default(),
+        Some(s) => {
+            InteriorOptions::parse(s).map_err(|e| new_err(Kind::Blend, format!("interior: {e}")))?
+        }
+    };
+    let ao = match anchor {
+        None | Some("none") => AnchorOptions::default(),
+        Some(s) => {
+            AnchorOptions::parse(s).map_err(|e| new_err(Kind::Blend, format!("anchor: {e}")))?
+        }
+    };
+    Ok((io, ao))
+}
+
 /// The surface-only blend, or the blend with internal springs and an anchor (Sec. 3.1, 3.4).
 enum Solver {
     Surface(Box<PhysicalBlend>),
@@ -172,8 +193,10 @@ impl PyPhysicalBlend {
     /// `kinematic_stretch` (default 10), `gradient_tolerance` (default 1e-6),
     /// `max_newton_iterations` (default 300): see the library's `BlendOptions`.
     /// `interior="lattice"` adds internal springs on a lattice inside each closed component
-    /// (Sec. 3.1); `anchor="auto"` adds the rigid interior anchor (Sec. 3.4), which then holds
-    /// the body instead of fixed vertices. `summary["interior"]` reports what was built.
+    /// (Sec. 3.1; `"lattice,2"` doubles its density, `"tetgen[,density]"` runs an external
+    /// tetgen); `anchor="auto"` (or `"x,y,z[,size]"`) adds the rigid interior anchor
+    /// (Sec. 3.4), which then holds the body instead of fixed vertices: the strings of
+    /// `morphkit blend --interior/--anchor`. `summary["interior"]` reports what was built.
     #[new]
     #[pyo3(signature = (base, targets, faces, *, fixed=None, hinge_weight=None,
         kinematic_stretch=None, gradient_tolerance=None, max_newton_iterations=None,
@@ -210,43 +233,13 @@ impl PyPhysicalBlend {
         if let Some(m) = max_newton_iterations {
             opts.max_newton_iterations = m;
         }
-        let mode = match interior.unwrap_or("none") {
-            "none" => InteriorMode::None,
-            "lattice" => InteriorMode::Lattice,
-            "tetgen" => InteriorMode::Tetgen,
-            other => {
-                return Err(new_err(
-                    Kind::Blend,
-                    format!(
-                        "interior: expected \"none\", \"lattice\" or \"tetgen\", got {other:?}"
-                    ),
-                ))
-            }
-        };
-        let placement = match anchor.unwrap_or("none") {
-            "none" => AnchorPlacement::None,
-            "auto" => AnchorPlacement::Auto,
-            other => {
-                return Err(new_err(
-                    Kind::Blend,
-                    format!("anchor: expected \"none\" or \"auto\", got {other:?}"),
-                ))
-            }
-        };
-        let inner = if mode == InteriorMode::None && placement == AnchorPlacement::None {
+        let (io, ao) = volume_options(interior, anchor)?;
+        let inner = if io.mode == InteriorMode::None && ao.placement == AnchorPlacement::None {
             Solver::Surface(Box::new(
                 py.detach(|| PhysicalBlend::new(&shapes, &opts))
                     .py(Kind::Blend)?,
             ))
         } else {
-            let io = InteriorOptions {
-                mode,
-                ..InteriorOptions::default()
-            };
-            let ao = AnchorOptions {
-                placement,
-                ..AnchorOptions::default()
-            };
             Solver::Volume(Box::new(
                 py.detach(|| VolumetricBlend::new(&shapes, &opts, &io, &ao))
                     .py(Kind::Blend)?,
@@ -285,13 +278,7 @@ impl PyPhysicalBlend {
                 (r.positions, r.stats)
             }
             Solver::Volume(b) => {
-                if !targets.is_empty() {
-                    return Err(new_err(
-                        Kind::Blend,
-                        "pulls: not available with interior or anchor yet",
-                    ));
-                }
-                let r = py.detach(|| b.solve(&w)).py(Kind::Blend)?;
+                let r = py.detach(|| b.solve_with(&w, &targets)).py(Kind::Blend)?;
                 (r.positions, r.stats)
             }
         };

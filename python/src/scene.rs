@@ -133,7 +133,9 @@ impl PyObstacle {
 /// than `tolerance` × the diagonal or `max_rounds` re-solves were made).
 ///
 /// `pulls = [(vertex, [(frame, (x, y, z)), …]), …]` are hard pulls (the vertex's part must be
-/// held by fixed vertices). Other arguments as :class:`PhysicalBlend`.
+/// held by fixed vertices). `interior` and `anchor` as in :class:`PhysicalBlend`: interior
+/// vertices are never contacts, and with an anchor obstacles and pulls are mapped into its
+/// frame. Other arguments as :class:`PhysicalBlend`.
 #[pyclass(name = "SceneBlend", module = "morphkit")]
 pub struct PySceneBlend {
     inner: SceneBlend,
@@ -145,7 +147,8 @@ pub struct PySceneBlend {
 impl PySceneBlend {
     #[new]
     #[pyo3(signature = (base, targets, faces, *, obstacles=Vec::new(), pulls=Vec::new(),
-        fixed=None, hinge_weight=None, tolerance=1e-4, max_rounds=10))]
+        fixed=None, hinge_weight=None, tolerance=1e-4, max_rounds=10, interior=None,
+        anchor=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -158,7 +161,10 @@ impl PySceneBlend {
         hinge_weight: Option<f64>,
         tolerance: f64,
         max_rounds: usize,
+        interior: Option<&str>,
+        anchor: Option<&str>,
     ) -> PyResult<Self> {
+        let (io, ao) = crate::blend::volume_options(interior, anchor)?;
         let shapes = crate::blend::shape_set(base, targets, faces)?;
         let k = shapes.len() - 1;
         let mut opts = BlendOptions {
@@ -184,7 +190,7 @@ impl PySceneBlend {
             max_rounds,
         };
         let inner = py
-            .detach(|| SceneBlend::new(&shapes, &opts, obstacles, pulls, &col))
+            .detach(|| SceneBlend::with_interior(&shapes, &opts, &io, &ao, obstacles, pulls, &col))
             .py(Kind::Blend)?;
         Ok(Self {
             inner,
@@ -212,9 +218,19 @@ impl PySceneBlend {
     }
 
     /// A :class:`Predictor` of the blend without obstacles and pulls (a preview that may
-    /// penetrate the obstacles), usable while :meth:`solve` runs on another thread.
-    fn predictor(&self) -> crate::blend::PyPredictor {
-        crate::blend::PyPredictor::new(self.inner.predictor(), self.targets)
+    /// penetrate the obstacles), usable while :meth:`solve` runs on another thread. Not
+    /// available with `interior` or `anchor`.
+    fn predictor(&self) -> PyResult<crate::blend::PyPredictor> {
+        if self.inner.interior_report().is_some() {
+            return Err(new_err(
+                Kind::Blend,
+                "predictor: not available with interior or anchor",
+            ));
+        }
+        Ok(crate::blend::PyPredictor::new(
+            self.inner.predictor(),
+            self.targets,
+        ))
     }
 
     /// The last frame's statistics: `solver` (as :attr:`PhysicalBlend.last_stats`),

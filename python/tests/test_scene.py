@@ -36,6 +36,27 @@ def test_bar_in_the_path_is_not_penetrated(cylinder):
     assert touched > 0
 
 
+def test_scene_with_an_interior(cylinder):
+    V0, V1, F = cylinder
+    bar = morphkit.Obstacle.cylinder(0.2, 2.0, name="bar", keys=[(0, (1.35, 0.0, 0.95))])
+    scene = morphkit.SceneBlend(V0, [V1], F, obstacles=[bar], interior="lattice")
+    x = scene.solve(1.0)
+    s = scene.last_stats
+    assert s["solver"]["converged"] and s["collision"]["resolved"]
+    assert s["collision"]["contacts"] > 0
+    assert all(c["vertex"] < len(V0) for c in s["contacts"])
+    r = np.hypot(x[:, 0] - 1.35, x[:, 2] - 0.95)
+    assert not ((r < 0.2 - 1e-4 * diag(V0)) & (np.abs(x[:, 1]) < 1.0)).any()
+    # Without obstacles it is the PhysicalBlend with the same interior, bit for bit.
+    plain = morphkit.SceneBlend(V0, [V1], F, interior="lattice").solve(0.5)
+    same = morphkit.PhysicalBlend(V0, [V1], F, interior="lattice").solve(0.5)
+    assert np.array_equal(plain, same)
+    with pytest.raises(morphkit.BlendError, match="interior"):
+        morphkit.SceneBlend(V0, [V1], F, interior="lattice").predictor()
+    with pytest.raises(morphkit.BlendError, match="anchor"):
+        morphkit.SceneBlend(V0, [V1], F, anchor="1,2")
+
+
 def test_far_obstacle_changes_nothing(cylinder):
     V0, V1, F = cylinder
     far = morphkit.Obstacle.sphere(0.1, keys=[(0, (50.0, 50.0, 50.0))])

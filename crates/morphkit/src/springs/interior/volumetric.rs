@@ -246,6 +246,38 @@ impl VolumetricBlend {
         self.finish(weights, r)
     }
 
+    /// The equilibrium with point targets on surface vertices (pulls, Ma et al. Sec. 4), given
+    /// in world coordinates; with an anchor they are mapped into its blended frame for the
+    /// solve. Without targets this is [`solve`](Self::solve), bit for bit.
+    pub fn solve_with(
+        &mut self,
+        weights: &Weights,
+        targets: &[crate::springs::PointTarget],
+    ) -> Result<VolumeResult, BlendError> {
+        let n = self.surface.num_vertices();
+        if let Some(t) = targets.iter().find(|t| t.vertex as usize >= n) {
+            return Err(BlendError::TargetOutOfRange {
+                vertex: t.vertex,
+                num_vertices: n,
+            });
+        }
+        let local: Vec<_> = match &self.motion {
+            Some(m) if !targets.is_empty() => {
+                let frame = m.at(&weights.coefficients(self.surface.len())?);
+                targets
+                    .iter()
+                    .map(|t| crate::springs::PointTarget {
+                        position: apply_inverse(&frame, t.position),
+                        ..*t
+                    })
+                    .collect()
+            }
+            _ => targets.to_vec(),
+        };
+        let r = self.blend.solve_with(weights, &local, None)?;
+        self.finish(weights, r)
+    }
+
     /// Every weight vector on up to `threads` threads; bit-for-bit [`solve`](Self::solve).
     pub fn solve_many(
         &mut self,
