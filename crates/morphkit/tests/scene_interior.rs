@@ -186,3 +186,67 @@ fn a_hard_pull_on_an_anchored_scene_is_met_in_world_coordinates() {
     // The pull moved the shape: the end is no longer where the free blend put it.
     assert!((p[1] - free.positions[n - 1][1]).abs() > 0.25);
 }
+
+/// Scene frames solved on two threads, and in reverse order, are those solved one by one.
+#[test]
+fn scene_frames_on_threads_equal_frames_one_by_one() {
+    let shapes = bent_bar();
+    let opts = BlendOptions::default();
+    let tip = VolumetricBlend::new(&shapes, &opts, &lattice(), &AnchorOptions::default())
+        .unwrap()
+        .solve(&Weights::Alpha(0.6))
+        .unwrap()
+        .positions[shapes.num_vertices() - 1];
+    // A ball moving across the free end's path over the frames.
+    let moving = Obstacle::primitive("ball", &Primitive::Sphere { radius: 0.3 }, 1.0)
+        .unwrap()
+        .with_keys(vec![
+            RigidKey {
+                frame: 0.0,
+                translation: [tip[0], tip[1] - 0.6, tip[2]],
+                rotation: Rotation::IDENTITY,
+            },
+            RigidKey {
+                frame: 5.0,
+                translation: [tip[0], tip[1] + 0.6, tip[2]],
+                rotation: Rotation::IDENTITY,
+            },
+        ])
+        .unwrap();
+    let frames: Vec<(f64, Weights)> = (0..6)
+        .map(|k| (k as f64, Weights::Alpha(0.4 + 0.05 * k as f64)))
+        .collect();
+    for interior in [InteriorOptions::default(), lattice()] {
+        let build = || {
+            SceneBlend::with_interior(
+                &shapes,
+                &opts,
+                &interior,
+                &AnchorOptions::default(),
+                vec![moving.clone()],
+                vec![],
+                &CollisionOptions::default(),
+            )
+            .unwrap()
+        };
+        let mut one = build();
+        let expected: Vec<_> = frames
+            .iter()
+            .map(|(f, w)| one.solve(*f, w).unwrap())
+            .collect();
+        assert!(expected.iter().any(|f| f.collision.contacts > 0));
+        let mut many = build();
+        let threaded = many.solve_many(&frames, 2);
+        let reversed: Vec<(f64, Weights)> = frames.iter().rev().cloned().collect();
+        let backwards = many.solve_many(&reversed, 2);
+        for k in 0..frames.len() {
+            let t = threaded[k].as_ref().unwrap();
+            let b = backwards[frames.len() - 1 - k].as_ref().unwrap();
+            for got in [t, b] {
+                common::assert_same_frame(&got.positions, &expected[k].positions, "threads");
+                common::assert_same_frame(&got.extra, &expected[k].extra, "threads");
+                assert_eq!(got.contacts, expected[k].contacts);
+            }
+        }
+    }
+}

@@ -240,10 +240,17 @@ fn solve_frames(
     Ok(out)
 }
 
+/// `--threads`, by default the machine's cores.
+fn threads(a: &BlendArgs) -> usize {
+    a.threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .clamp(1, 64)
+}
+
 /// Runs `morphkit blend`.
 pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     if let Some(scene) = &a.scene {
-        return super::scene::run(scene, &a.out, a.report.as_deref());
+        return super::scene::run(scene, &a.out, a.report.as_deref(), threads(a));
     }
     let start = Instant::now();
     let Some(base) = &a.base else {
@@ -303,10 +310,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         max_memory_bytes: (a.max_memory * (1u64 << 30) as f64) as u64,
         ..Default::default()
     };
-    let threads = a
-        .threads
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .clamp(1, 64);
+    let threads = threads(a);
     if super::volume::requested(a) {
         return super::volume::run(a, &shapes, &weights, &options, threads, start, outputs);
     }

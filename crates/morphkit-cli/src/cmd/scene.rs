@@ -12,8 +12,14 @@ use serde_json::json;
 use std::path::Path;
 use std::time::Instant;
 
-/// Runs the scene at `scene_path`, writing frames to `out` and an optional JSON report.
-pub fn run(scene_path: &Path, out: &Path, report: Option<&Path>) -> anyhow::Result<()> {
+/// Runs the scene at `scene_path` on up to `threads` threads (frames are independent, so the
+/// result does not depend on it), writing frames to `out` and an optional JSON report.
+pub fn run(
+    scene_path: &Path,
+    out: &Path,
+    report: Option<&Path>,
+    threads: usize,
+) -> anyhow::Result<()> {
     let start = Instant::now();
     let scene = Scene::load(scene_path)?;
     let mut inputs = scene.inputs.clone();
@@ -39,10 +45,20 @@ pub fn run(scene_path: &Path, out: &Path, report: Option<&Path>) -> anyhow::Resu
     let mut rows = Vec::with_capacity(n);
     let mut unresolved = Vec::new();
     let mut unconverged = Vec::new();
-    for (k, w) in scene.weights.iter().enumerate() {
-        let f = solver
-            .solve(k as f64, w)
-            .with_context(|| format!("frame {k}"))?;
+    let numbered: Vec<(f64, morphkit::springs::Weights)> = scene
+        .weights
+        .iter()
+        .enumerate()
+        .map(|(k, w)| (k as f64, w.clone()))
+        .collect();
+    let mut solved = Vec::with_capacity(n);
+    // Chunks of a few frames per thread, so that the progress bar moves.
+    for chunk in numbered.chunks(4 * threads.max(1)) {
+        solved.extend(solver.solve_many(chunk, threads));
+        bar.inc(chunk.len() as u64);
+    }
+    for (k, f) in solved.into_iter().enumerate() {
+        let f = f.with_context(|| format!("frame {k}"))?;
         if !f.collision.resolved {
             unresolved.push(k);
         }
@@ -59,7 +75,6 @@ pub fn run(scene_path: &Path, out: &Path, report: Option<&Path>) -> anyhow::Resu
             "contact_vertices": f.contacts.iter().map(|c| c.vertex).collect::<Vec<_>>(),
         }));
         frames.push((format!("frame_{k:04}"), f.positions));
-        bar.inc(1);
     }
     bar.finish_and_clear();
     if !unresolved.is_empty() {

@@ -9,8 +9,8 @@ use crate::mesh::{bbox_diagonal, Point, ShapeSet};
 use crate::springs::interior::anchor::apply_inverse;
 use crate::springs::interior::{AnchorMotion, InteriorReport};
 use crate::springs::{
-    AnchorOptions, AnchorPlacement, BlendOptions, BlendPredictor, FrameStats, InteriorMode,
-    InteriorOptions, PhysicalBlend, VolumetricBlend, Weights,
+    AnchorOptions, AnchorPlacement, BlendOptions, BlendPredictor, FrameSolver, FrameStats,
+    InteriorMode, InteriorOptions, PhysicalBlend, VolumetricBlend, Weights,
 };
 
 /// One blended frame of a scene.
@@ -167,44 +167,50 @@ impl SceneBlend {
     /// The frame at frame number `frame` (it places the obstacles and the pulls) with
     /// `weights`. Frames do not depend on each other.
     pub fn solve(&mut self, frame: f64, weights: &Weights) -> Result<SceneFrame, SceneError> {
-        let motion = match &self.motion {
-            Some(m) => Some(m.at(&weights.coefficients(self.solver.shapes().len())?)),
-            None => None,
-        };
-        let targets: Vec<_> = self
-            .pulls
-            .iter()
-            .map(|p| {
-                let mut t = p.target_at(frame);
-                if let Some(m) = &motion {
-                    t.position = apply_inverse(m, t.position);
-                }
-                t
+        let (ctx, solver) = self.split();
+        ctx.solve(&mut solver.frame_solver(), frame, weights)
+    }
+
+    /// Frames `(frame number, weights)`, spread over up to `threads` threads (each with its own
+    /// numeric workspace), in input order. Each equals [`solve`](Self::solve) of the same
+    /// frame bit for bit, whatever the thread count: frames never share contacts or starts.
+    pub fn solve_many(
+        &mut self,
+        frames: &[(f64, Weights)],
+        threads: usize,
+    ) -> Vec<Result<SceneFrame, SceneError>> {
+        let (ctx, solver) = self.split();
+        solver
+            .map_frames(frames, threads, |s, (f, w)| ctx.solve(s, *f, w))
+            .into_iter()
+            .enumerate()
+            .map(|(k, r)| {
+                r.unwrap_or_else(|| {
+                    Err(
+                        crate::springs::BlendError::InvalidOption(format!("frame {k} was lost"))
+                            .into(),
+                    )
+                })
             })
-            .collect();
-        let placed: Vec<_> = self.obstacles.iter().map(|o| o.placed(frame)).collect();
-        let (result, contacts, collision) = solve_frame(
+            .collect()
+    }
+
+    /// The read-only part of the scene beside the solver, borrowed apart.
+    fn split(&mut self) -> (FrameContext<'_>, &mut PhysicalBlend) {
+        let shapes = self.solver.shapes().len();
+        (
+            FrameContext {
+                shapes,
+                surface_vertices: self.surface_vertices,
+                motion: self.motion.as_ref(),
+                obstacles: &self.obstacles,
+                pulls: &self.pulls,
+                options: &self.options,
+                candidates: &self.candidates,
+                tolerance: self.tolerance,
+            },
             &mut self.solver,
-            weights,
-            &targets,
-            &placed,
-            &self.candidates,
-            &self.options,
-            self.tolerance,
-            motion.as_ref(),
-        )?;
-        let mut positions = result.positions;
-        if let Some(m) = &motion {
-            positions.iter_mut().for_each(|p| *p = m.apply(*p));
-        }
-        let extra = positions.split_off(self.surface_vertices);
-        Ok(SceneFrame {
-            positions,
-            extra,
-            solver: result.stats,
-            contacts,
-            collision,
-        })
+        )
     }
 
     /// What the interior and anchor set-up built ([`with_interior`](Self::with_interior)).
@@ -251,4 +257,70 @@ pub fn blend_scene(
         .enumerate()
         .map(|(k, w)| s.solve(k as f64, w))
         .collect()
+}
+
+/// What one frame of a scene reads besides the solver.
+struct FrameContext<'a> {
+    shapes: usize,
+    surface_vertices: usize,
+    motion: Option<&'a AnchorMotion>,
+    obstacles: &'a [Obstacle],
+    pulls: &'a [Pull],
+    options: &'a CollisionOptions,
+    candidates: &'a Candidates,
+    tolerance: f64,
+}
+
+impl FrameContext<'_> {
+    /// One frame: pulls and obstacles placed at `frame`, mapped into the anchor's frame when
+    /// anchored, the collision rounds, and the result back in the world.
+    fn solve(
+        &self,
+        solver: &mut FrameSolver<'_>,
+        frame: f64,
+        weights: &Weights,
+    ) -> Result<SceneFrame, SceneError> {
+        let motion = match self.motion {
+            Some(m) => Some(m.at(&weights.coefficients(self.shapes)?)),
+            None => None,
+        };
+        let targets: Vec<_> = self
+            .pulls
+            .iter()
+            .map(|p| {
+                let mut t = p.target_at(frame);
+                if let Some(m) = &motion {
+                    t.position = apply_inverse(m, t.position);
+                }
+                t
+            })
+            .collect();
+        let placed: Vec<_> = self.obstacles.iter().map(|o| o.placed(frame)).collect();
+        let (result, contacts, collision) = solve_frame(
+            solver,
+            weights,
+            &targets,
+            &placed,
+            self.candidates,
+            self.options,
+            self.tolerance,
+            motion.as_ref(),
+        )?;
+        let mut positions = result.positions;
+        if let Some(m) = &motion {
+            positions.iter_mut().for_each(|p| *p = m.apply(*p));
+        }
+        let extra = positions.split_off(self.surface_vertices);
+        let mut solver_stats = result.stats;
+        solver_stats
+            .unconverged_vertices
+            .retain(|&v| (v as usize) < self.surface_vertices);
+        Ok(SceneFrame {
+            positions,
+            extra,
+            solver: solver_stats,
+            contacts,
+            collision,
+        })
+    }
 }

@@ -30,7 +30,7 @@ use super::obstacle::Placed;
 use crate::geom::RigidTransform;
 use crate::mesh::Point;
 use crate::springs::interior::anchor::apply_inverse;
-use crate::springs::{BlendError, BlendResult, PhysicalBlend, PointTarget, Weights};
+use crate::springs::{BlendError, BlendResult, FrameSolver, PointTarget, Weights};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -134,7 +134,7 @@ pub(crate) struct Candidates {
 /// and contacts in the world.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_frame(
-    solver: &mut PhysicalBlend,
+    solver: &mut FrameSolver<'_>,
     weights: &Weights,
     pulls: &[PointTarget],
     placed: &[Placed<'_>],

@@ -344,7 +344,7 @@ impl PhysicalBlend {
         targets: &[PointTarget],
         start: Option<&[crate::mesh::Point]>,
     ) -> Result<BlendResult, BlendError> {
-        self.rig.solve(&mut self.ws, weights, targets, start)
+        self.frame_solver().solve_with(weights, targets, start)
     }
 
     /// Solves every weight vector, spread over up to `threads` threads (each with its own
@@ -355,7 +355,28 @@ impl PhysicalBlend {
         weights: &[Weights],
         threads: usize,
     ) -> Vec<Result<BlendResult, BlendError>> {
-        let threads = threads.clamp(1, weights.len().max(1));
+        self.map_frames(weights, threads, |s, w| s.solve_with(w, &[], None))
+            .into_iter()
+            .enumerate()
+            .map(|(k, r)| {
+                r.unwrap_or_else(|| Err(BlendError::InvalidOption(format!("frame {k} was lost"))))
+            })
+            .collect()
+    }
+
+    /// `f(solver, item)` for every item, spread over up to `threads` threads, each with its
+    /// own numeric workspace (the symbolic analysis is shared; fewer threads when memory for a
+    /// workspace is short). Results come back in input order; `None` marks an item lost to a
+    /// thread that panicked (a bug), so that the caller can report it instead of crashing.
+    /// Each call solves from scratch, so the results do not depend on the thread count or on
+    /// which thread ran which item.
+    pub fn map_frames<T: Sync, R: Send>(
+        &mut self,
+        items: &[T],
+        threads: usize,
+        f: impl Fn(&mut FrameSolver<'_>, &T) -> R + Sync,
+    ) -> Vec<Option<R>> {
+        let threads = threads.clamp(1, items.len().max(1));
         let mut workspaces = Vec::with_capacity(threads - 1);
         for _ in 1..threads {
             match self.ws.chol.share_symbolic() {
@@ -364,25 +385,30 @@ impl PhysicalBlend {
                     self.ws.blocks.clone(),
                     self.ws.exact.len(),
                 )),
-                Err(_) => break, // fewer threads when memory is short
+                Err(_) => break,
             }
         }
         let rig = &self.rig;
-        let mut slots: Vec<Option<Result<BlendResult, BlendError>>> =
-            (0..weights.len()).map(|_| None).collect();
+        let f = &f;
+        let mut slots: Vec<Option<R>> = (0..items.len()).map(|_| None).collect();
         let stride = workspaces.len() + 1;
         std::thread::scope(|scope| {
             let mut handles = Vec::new();
             for (t, mut ws) in workspaces.into_iter().enumerate() {
                 handles.push(scope.spawn(move || {
-                    (t + 1..weights.len())
+                    let mut solver = FrameSolver { rig, ws: &mut ws };
+                    (t + 1..items.len())
                         .step_by(stride)
-                        .map(|k| (k, rig.solve(&mut ws, &weights[k], &[], None)))
+                        .map(|k| (k, f(&mut solver, &items[k])))
                         .collect::<Vec<_>>()
                 }));
             }
-            for k in (0..weights.len()).step_by(stride) {
-                slots[k] = Some(rig.solve(&mut self.ws, &weights[k], &[], None));
+            let mut solver = FrameSolver {
+                rig,
+                ws: &mut self.ws,
+            };
+            for k in (0..items.len()).step_by(stride) {
+                slots[k] = Some(f(&mut solver, &items[k]));
             }
             for h in handles {
                 if let Ok(done) = h.join() {
@@ -393,12 +419,34 @@ impl PhysicalBlend {
             }
         });
         slots
-            .into_iter()
-            .enumerate()
-            .map(|(k, s)| {
-                s.unwrap_or_else(|| Err(BlendError::InvalidOption(format!("frame {k} was lost"))))
-            })
-            .collect()
+    }
+
+    /// A solver over this blend's own workspace (what [`map_frames`](Self::map_frames) hands
+    /// to each item on the calling thread).
+    pub fn frame_solver(&mut self) -> FrameSolver<'_> {
+        FrameSolver {
+            rig: &self.rig,
+            ws: &mut self.ws,
+        }
+    }
+}
+
+/// One thread's view of a [`PhysicalBlend`]: the shared rig and that thread's numeric
+/// workspace. Its solves are those of the blend, bit for bit.
+pub struct FrameSolver<'a> {
+    rig: &'a Rig,
+    ws: &'a mut Workspace,
+}
+
+impl FrameSolver<'_> {
+    /// As [`PhysicalBlend::solve_with`].
+    pub fn solve_with(
+        &mut self,
+        weights: &Weights,
+        targets: &[PointTarget],
+        start: Option<&[crate::mesh::Point]>,
+    ) -> Result<BlendResult, BlendError> {
+        self.rig.solve(self.ws, weights, targets, start)
     }
 }
 

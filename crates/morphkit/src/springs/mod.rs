@@ -68,7 +68,7 @@ mod system;
 pub mod terms;
 pub mod weights;
 
-pub use blender::{blend, BlendPredictor, PhysicalBlend};
+pub use blender::{blend, BlendPredictor, FrameSolver, PhysicalBlend};
 pub use constraints::{stretched_vertices, Components, Constraints, FixedVertices, Gauge};
 pub use interior::{
     AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions, VolumetricBlend,
