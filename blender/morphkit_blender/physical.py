@@ -353,10 +353,9 @@ class MORPHKIT_OT_physical_bake(bpy.types.Operator):
         _settle(obj.name)
         try:
             blend, F = solver_for(obj, scene)
-            if isinstance(blend, morphkit.SceneBlend):
-                frames = np.stack([blend.solve(w) for w in rows])
-            else:
-                frames = blend.solve_many(rows, threads=self.threads)
+            # Obstacles and pulls are taken at their current pose (frame number 0 of the
+            # scene blend) for every frame; frames are independent, so threads change nothing.
+            frames = blend.solve_many(rows, threads=self.threads)
             morphkit.write_animation(path, frames, F)
         except morphkit.MorphkitError as e:
             self.report({"ERROR"}, str(e))

@@ -1,7 +1,7 @@
 //! Physical blends in a scene (Ma et al. 2012, Sec. 4): rigid obstacles with keyframed motion
 //! and keyframed pulls, through the library's `scene::SceneBlend`.
 
-use crate::arrays::to_array;
+use crate::arrays::{to_array, to_array3};
 use crate::dict::to_dict;
 use crate::errors::{new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
@@ -11,7 +11,7 @@ use morphkit::scene::{
     SceneFrame,
 };
 use morphkit::springs::{BlendOptions, Weights};
-use numpy::PyArray2;
+use numpy::{PyArray2, PyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -215,6 +215,60 @@ impl PySceneBlend {
         let out = to_array(py, &r.positions);
         self.last = Some(r);
         Ok(out)
+    }
+
+    /// Every weight vector of `weights` (a sequence, each as in :meth:`solve`) as frame
+    /// `frames[k]` (default: frame number k), solved on up to `threads` threads; a
+    /// `(len(weights), n, 3)` array in input order, equal to :meth:`solve` frame by frame.
+    /// :attr:`last_stats` is the last frame's. The GIL is released.
+    #[pyo3(signature = (weights, *, frames=None, convex=false, threads=1))]
+    fn solve_many<'py>(
+        &mut self,
+        py: Python<'py>,
+        weights: &Bound<'py, PyAny>,
+        frames: Option<Vec<f64>>,
+        convex: bool,
+        threads: usize,
+    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let rows = weights
+            .try_iter()
+            .map_err(|_| {
+                new_err(
+                    Kind::Blend,
+                    "weights: expected a sequence of weight vectors",
+                )
+            })?
+            .map(|row| crate::blend::weights(&row?, convex, self.targets))
+            .collect::<PyResult<Vec<Weights>>>()?;
+        let numbers = frames.unwrap_or_else(|| (0..rows.len()).map(|k| k as f64).collect());
+        if numbers.len() != rows.len() {
+            return Err(new_err(
+                Kind::Blend,
+                format!(
+                    "frames: {} frame numbers for {} weight vectors",
+                    numbers.len(),
+                    rows.len()
+                ),
+            ));
+        }
+        let items: Vec<(f64, Weights)> = numbers.into_iter().zip(rows).collect();
+        let inner = &mut self.inner;
+        let results = py.detach(|| inner.solve_many(&items, threads));
+        let mut out = Vec::with_capacity(results.len());
+        let mut last = None;
+        for (k, r) in results.into_iter().enumerate() {
+            let f = r.map_err(|e| {
+                new_err(
+                    Kind::Blend,
+                    format!("frame {k}: {}", crate::errors::chain(&e)),
+                )
+            })?;
+            out.push(f.positions.clone());
+            last = Some(f);
+        }
+        self.last = last;
+        let n = out.first().map_or(0, Vec::len);
+        Ok(to_array3(py, &out, n))
     }
 
     /// A :class:`Predictor` of the blend without obstacles and pulls (a preview that may

@@ -57,6 +57,23 @@ def test_scene_with_an_interior(cylinder):
         morphkit.SceneBlend(V0, [V1], F, anchor="1,2")
 
 
+def test_scene_frames_on_threads_equal_single_solves(cylinder):
+    V0, V1, F = cylinder
+    ball = morphkit.Obstacle.sphere(
+        0.3, keys=[(0, (1.2, -0.5, 0.9)), (3, (1.2, 0.5, 0.9))]
+    )
+    scene = morphkit.SceneBlend(V0, [V1], F, obstacles=[ball])
+    alphas = [0.7, 0.8, 0.9, 1.0]
+    one = np.stack([scene.solve(a, frame=k) for k, a in enumerate(alphas)])
+    many = scene.solve_many(alphas, threads=2)
+    assert many.shape == (4, len(V0), 3)
+    assert np.array_equal(one, many)
+    back = scene.solve_many(alphas[::-1], frames=[3, 2, 1, 0], threads=2)
+    assert np.array_equal(one, back[::-1])
+    with pytest.raises(morphkit.BlendError, match="frame numbers"):
+        scene.solve_many(alphas, frames=[0, 1])
+
+
 def test_far_obstacle_changes_nothing(cylinder):
     V0, V1, F = cylinder
     far = morphkit.Obstacle.sphere(0.1, keys=[(0, (50.0, 50.0, 50.0))])
