@@ -103,6 +103,10 @@ pub struct BlendArgs {
     /// knob; results agree within the tolerance.
     #[arg(long, default_value_t = 1)]
     pub refactor_every: usize,
+    /// …but keep it while the last inner solve converged within N CG iterations (0: never
+    /// keep). A speed knob; results agree within the tolerance.
+    #[arg(long, default_value_t = 8)]
+    pub keep_factor_cg: usize,
     /// Arithmetic of the Newton preconditioner's factor: `single` (half the memory, faster;
     /// the equilibrium is the same to the gradient tolerance) or `double`.
     #[arg(long, default_value = "single", value_parser = ["single", "double"])]
@@ -302,6 +306,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         gradient_tolerance: a.tolerance,
         kinematic_stretch: a.kinematic_stretch,
         refactor_every: a.refactor_every,
+        keep_factor_cg: a.keep_factor_cg,
         factor_precision: if a.factor_precision == "double" {
             Precision::Double
         } else {

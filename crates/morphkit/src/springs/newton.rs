@@ -6,8 +6,11 @@
 //!   Wright Alg. 7.2; Conn, Gould & Toint §7.5.1), preconditioned by a Cholesky factor of the
 //!   projected Hessian, which also defines the trust-region norm. Negative curvature of
 //!   compressed springs is followed to the trust-region boundary instead of being clamped away.
-//!   The factor is refreshed only when the inner iteration runs out of its budget without
-//!   progress. Near the solution this is Newton's method with quadratic convergence.
+//!   The factor is refreshed every [`BlendOptions::refactor_every`] steps, except while it still
+//!   fits the Hessian (the last inner solve converged within
+//!   [`BlendOptions::keep_factor_cg`] iterations), and whenever the inner iteration runs out
+//!   of its budget without progress. Near the solution this is Newton's method with quadratic
+//!   convergence.
 //! - [`projected_newton`]: a fresh factorization of the projected Hessian every step and an
 //!   Armijo backtracking line search.
 //!
@@ -206,10 +209,15 @@ pub(crate) fn trust_region(
     // Accepted steps since the last factorization (a rejected step leaves x, hence the
     // Hessian, unchanged: no refactorization then).
     let mut accepted_since = 0usize;
+    let (mut last_cg, mut last_converged) = (usize::MAX, false);
     while !stats.converged && stats.newton_iterations < prob.options.max_newton_iterations {
         stats.newton_iterations += 1;
         let every = prob.options.refactor_every;
-        if refactor || (every > 0 && accepted_since >= every) {
+        // A factor whose last inner solve converged within a few CG iterations still fits the
+        // Hessian: keep it (a count of iterations, never a time).
+        let keep = prob.options.keep_factor_cg;
+        let fits = keep > 0 && last_converged && last_cg <= keep;
+        if refactor || (every > 0 && accepted_since >= every && !fits) {
             accepted_since = 0;
             prob.hessian(ws, x, HessianKind::Projected, false);
             prob.factorize(ws, stats)?;
@@ -230,6 +238,7 @@ pub(crate) fn trust_region(
             atol_max: 0.1 * prob.tolerance,
             max_iter: (prob.options.cg_iterations.max(1) * extend).min(400),
         };
+        let cg_before = stats.cg_iterations;
         let (chol, _, exact) = ws.parts();
         let mut op = |p: &[f64], out: &mut [f64]| sys.mul(exact, p, out);
         let mut pre = |r: &mut [f64]| chol.solve_one(r).is_ok();
@@ -245,6 +254,8 @@ pub(crate) fn trust_region(
             refactor = true;
             continue;
         };
+        last_cg = stats.cg_iterations - cg_before;
+        last_converged = step.termination == Termination::Converged;
         extend = if step.termination == Termination::Budget {
             (2 * extend).min(10)
         } else {
