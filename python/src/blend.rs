@@ -114,6 +114,19 @@ enum Solver {
     Volume(Box<VolumetricBlend>),
 }
 
+/// A sequence of weight vectors, each as [`weights`] reads it.
+pub fn weight_rows(obj: &Bound<'_, PyAny>, convex: bool, targets: usize) -> PyResult<Vec<Weights>> {
+    obj.try_iter()
+        .map_err(|_| {
+            new_err(
+                Kind::Blend,
+                "weights: expected a sequence of weight vectors",
+            )
+        })?
+        .map(|row| weights(&row?, convex, targets))
+        .collect()
+}
+
 pub fn weights(obj: &Bound<'_, PyAny>, convex: bool, targets: usize) -> PyResult<Weights> {
     let w: Vec<f64> = match obj.extract::<f64>() {
         Ok(a) if !convex && targets == 1 => vec![a],
@@ -298,16 +311,7 @@ impl PyPhysicalBlend {
         convex: bool,
         threads: usize,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        let rows = weights
-            .try_iter()
-            .map_err(|_| {
-                new_err(
-                    Kind::Blend,
-                    "weights: expected a sequence of weight vectors",
-                )
-            })?
-            .map(|row| self::weights(&row?, convex, self.targets))
-            .collect::<PyResult<Vec<Weights>>>()?;
+        let rows = weight_rows(weights, convex, self.targets)?;
         let results: Vec<Result<(Vec<_>, FrameStats), _>> = match &mut self.inner {
             Solver::Surface(b) => py
                 .detach(|| b.solve_many(&rows, threads))

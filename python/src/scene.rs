@@ -230,16 +230,7 @@ impl PySceneBlend {
         convex: bool,
         threads: usize,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        let rows = weights
-            .try_iter()
-            .map_err(|_| {
-                new_err(
-                    Kind::Blend,
-                    "weights: expected a sequence of weight vectors",
-                )
-            })?
-            .map(|row| crate::blend::weights(&row?, convex, self.targets))
-            .collect::<PyResult<Vec<Weights>>>()?;
+        let rows = crate::blend::weight_rows(weights, convex, self.targets)?;
         let numbers = frames.unwrap_or_else(|| (0..rows.len()).map(|k| k as f64).collect());
         if numbers.len() != rows.len() {
             return Err(new_err(

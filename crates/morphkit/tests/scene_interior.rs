@@ -3,7 +3,7 @@
 
 mod common;
 
-use morphkit::mesh::{bbox_diagonal, generate, Point, ShapeSet};
+use morphkit::mesh::{bbox_diagonal, Point};
 use morphkit::scene::{
     CollisionOptions, Obstacle, Primitive, Pull, PullKey, PullKind, RigidKey, SceneBlend,
 };
@@ -12,19 +12,6 @@ use morphkit::springs::{
     Weights,
 };
 use parry3d_f64::math::Rotation;
-
-fn bent_bar() -> ShapeSet {
-    let bar = generate::bar(4.0, 0.6, 2, 16);
-    let bent = generate::bend(&bar.positions, 2.0, 2.0, std::f64::consts::FRAC_PI_2);
-    ShapeSet::new(
-        bar.clone(),
-        vec![
-            ("straight".into(), bar.positions.clone()),
-            ("bent".into(), bent),
-        ],
-    )
-    .unwrap()
-}
 
 fn ball(at: Point, radius: f64) -> Obstacle {
     Obstacle::primitive("ball", &Primitive::Sphere { radius }, 1.0)
@@ -56,7 +43,7 @@ fn anchored() -> AnchorOptions {
 /// and the interior follows (it is not left where the surface was pushed away from).
 #[test]
 fn scenes_carry_the_interior_and_the_anchor() {
-    let shapes = bent_bar();
+    let shapes = common::bent_bar();
     let n = shapes.num_vertices();
     let opts = BlendOptions::default();
     let tol = 1e-4 * bbox_diagonal(shapes.positions(0));
@@ -143,7 +130,7 @@ fn scenes_carry_the_interior_and_the_anchor() {
 /// coordinates still lands exactly on its world position.
 #[test]
 fn a_hard_pull_on_an_anchored_scene_is_met_in_world_coordinates() {
-    let shapes = bent_bar();
+    let shapes = common::bent_bar();
     let n = shapes.num_vertices();
     let opts = BlendOptions::default();
     let w = Weights::Alpha(0.5);
@@ -190,7 +177,7 @@ fn a_hard_pull_on_an_anchored_scene_is_met_in_world_coordinates() {
 /// Scene frames solved on two threads, and in reverse order, are those solved one by one.
 #[test]
 fn scene_frames_on_threads_equal_frames_one_by_one() {
-    let shapes = bent_bar();
+    let shapes = common::bent_bar();
     let opts = BlendOptions::default();
     let tip = VolumetricBlend::new(&shapes, &opts, &lattice(), &AnchorOptions::default())
         .unwrap()

@@ -17,20 +17,6 @@ fn dist(a: Point, b: Point) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
-/// A bar bent by 90° over its second half, with its first end fixed automatically.
-fn bent_bar() -> ShapeSet {
-    let bar = generate::bar(4.0, 0.6, 2, 16);
-    let bent = generate::bend(&bar.positions, 2.0, 2.0, std::f64::consts::FRAC_PI_2);
-    ShapeSet::new(
-        bar.clone(),
-        vec![
-            ("straight".into(), bar.positions.clone()),
-            ("bent".into(), bent),
-        ],
-    )
-    .unwrap()
-}
-
 fn sphere_at(name: &str, radius: f64, keys: Vec<(f64, Point)>) -> Obstacle {
     Obstacle::primitive(name, &Primitive::Sphere { radius }, 1.0)
         .unwrap()
@@ -54,7 +40,7 @@ fn alphas(n: usize) -> Vec<Weights> {
 
 #[test]
 fn no_obstacle_and_a_never_touching_obstacle_give_the_plain_blend() {
-    let shapes = bent_bar();
+    let shapes = common::bent_bar();
     let opts = BlendOptions::default();
     let w = alphas(5);
     let mut plain = PhysicalBlend::new(&shapes, &opts).unwrap();
@@ -89,7 +75,7 @@ fn no_obstacle_and_a_never_touching_obstacle_give_the_plain_blend() {
 
 #[test]
 fn an_obstacle_in_the_path_is_wrapped_without_penetration() {
-    let shapes = bent_bar();
+    let shapes = common::bent_bar();
     let opts = BlendOptions::default();
     let w = alphas(6);
     let mut plain = PhysicalBlend::new(&shapes, &opts).unwrap();

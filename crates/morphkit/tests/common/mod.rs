@@ -57,3 +57,19 @@ pub fn assert_same_frame(a: &[[f64; 3]], b: &[[f64; 3]], what: &str) {
         "{what}: frames differ by {worst:e} (diagonal {diag:e})"
     );
 }
+
+/// A closed bar (4 × 0.6 × 0.6, 16 segments) and the same bar bent by 90° over its second
+/// half: its first half moves in no shape, so `FixedVertices::Auto` fixes it.
+pub fn bent_bar() -> morphkit::mesh::ShapeSet {
+    use morphkit::mesh::{generate, ShapeSet};
+    let bar = generate::bar(4.0, 0.6, 2, 16);
+    let bent = generate::bend(&bar.positions, 2.0, 2.0, std::f64::consts::FRAC_PI_2);
+    ShapeSet::new(
+        bar.clone(),
+        vec![
+            ("straight".into(), bar.positions.clone()),
+            ("bent".into(), bent),
+        ],
+    )
+    .unwrap()
+}
