@@ -108,13 +108,19 @@ impl SymmetricPattern {
     pub fn mul_vec_into(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
         y.iter_mut().for_each(|v| *v = 0.0);
         for c in 0..self.n {
-            for k in self.col_ptr[c]..self.col_ptr[c + 1] {
-                let r = self.row_idx[k];
-                y[r] += values[k] * x[c];
-                if r != c {
-                    y[c] += values[k] * x[r];
-                }
+            // Column c holds its diagonal first, then rows below it (sorted): the column adds
+            // A_rc x_c to y_r and, by symmetry, A_rc x_r to y_c (summed here, added once).
+            let (start, end) = (self.col_ptr[c], self.col_ptr[c + 1]);
+            let xc = x[c];
+            let mut acc = values[start] * xc;
+            for (&r, &v) in self.row_idx[start + 1..end]
+                .iter()
+                .zip(&values[start + 1..end])
+            {
+                y[r] += v * xc;
+                acc += v * x[r];
             }
+            y[c] += acc;
         }
     }
 

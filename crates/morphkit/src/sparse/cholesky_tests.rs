@@ -151,3 +151,25 @@ fn singular_and_indefinite_matrices_are_errors_not_nans() {
     let mut c = Cholesky::analyze(p, Ordering::Amd).unwrap();
     assert!(matches!(c.factorize(&v), Err(SolveError::NonFinite { .. })));
 }
+
+#[test]
+fn symmetric_product_equals_the_dense_one() {
+    let t = random_spd(40, 3);
+    let (p, v) = SymmetricPattern::from_triplets(40, &t).unwrap();
+    let mut dense = vec![vec![0.0; 40]; 40];
+    for &(i, j, a) in &t {
+        dense[i][j] += a;
+        if i != j {
+            dense[j][i] += a;
+        }
+    }
+    let x: Vec<f64> = (0..40).map(|k| (k as f64 * 0.37).sin()).collect();
+    let y = p.mul_vec(&v, &x);
+    for i in 0..40 {
+        let want: f64 = (0..40).map(|j| dense[i][j] * x[j]).sum();
+        assert!(
+            (y[i] - want).abs() <= 1e-12 * want.abs().max(1.0),
+            "row {i}"
+        );
+    }
+}
