@@ -17,7 +17,7 @@ use super::InteriorError;
 use crate::geom::{kabsch, RigidTransform};
 use crate::mesh::{bbox_diagonal, norm, sub, Point};
 use crate::springs::{Spring, SpringKind};
-use nalgebra::{Matrix3, Rotation3, Vector3};
+use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
 /// A placed anchor.
 #[derive(Clone, Debug, PartialEq)]
@@ -193,7 +193,13 @@ impl AnchorMotion {
                 continue;
             }
             let fit = kabsch(base, p, &[]);
-            logs.push(Rotation3::from_matrix_unchecked(fit.rotation).scaled_axis());
+            // Through the quaternion (Shepperd's method): the log map of the matrix itself takes
+            // acos of its trace and gives NaN for a turn of nearly 180°.
+            let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
+                fit.rotation,
+            ));
+            logs.push(q.scaled_axis());
+            eprintln!("DBG anchor {:?} {:?} {:?}", fit.rotation, logs.last(), p);
             displacements.push(fit.rotation * a + fit.translation - a);
         }
         Self {
@@ -271,5 +277,33 @@ mod tests {
         }
         let back = apply_inverse(&end, end.apply([0.3, 0.2, 0.1]));
         assert!(norm(sub(back, [0.3, 0.2, 0.1])) < 1e-12);
+    }
+
+    #[test]
+    fn a_turn_of_nearly_half_a_circle_has_a_finite_log() {
+        let base: Vec<Point> = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        for angle in [std::f64::consts::PI, std::f64::consts::PI - 1e-9] {
+            let r = Rotation3::from_axis_angle(&Vector3::y_axis(), angle).into_inner();
+            let moved: Vec<Point> = base
+                .iter()
+                .map(|p| {
+                    let q = r * Vector3::from(*p);
+                    [q.x, q.y, q.z]
+                })
+                .collect();
+            let m = AnchorMotion::new(&base, &[base.clone(), moved]);
+            assert!(m.logs[1].iter().all(|v| v.is_finite()), "{:?}", m.logs[1]);
+            assert!(
+                (m.logs[1].norm() - angle).abs() < 1e-6,
+                "{}",
+                m.logs[1].norm()
+            );
+            assert!((m.shape(1).rotation - r).norm() < 1e-6);
+        }
     }
 }
