@@ -333,9 +333,16 @@ fn an_open_mesh_gets_no_interior_and_blends_with_surface_springs() {
         .solve(&w)
         .unwrap();
     common::assert_same_frame(&r.positions, &plain.positions, "open mesh");
-    // An anchor still works on an open mesh (tied to the nearest surface vertices).
+    // An anchor still works on an open mesh (tied to the nearest surface vertices), and it
+    // turns with its neighbourhood: the grid's middle, where the 1-radian bend starts, barely
+    // turns (the reverse solve may find the cube turned over onto itself; that is undone).
     let mut v = volumetric(&s, &lattice(2.0), &auto_anchor());
     assert_eq!(v.report().anchor_vertices, 8);
+    let r = v.solve(&Weights::Alpha(1.0)).unwrap();
+    assert!(r.stats.converged);
+    let m = r.anchor_motion.expect("anchored");
+    let turn = ((m.rotation.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos();
+    assert!(turn < 0.5, "the anchor turned by {turn} rad");
     assert!(v.solve(&w).unwrap().stats.converged);
 }
 

@@ -138,8 +138,11 @@ impl VolumetricBlend {
             let extra = if springs.is_empty() {
                 guess
             } else {
-                let (e, its) = reverse::solve(shapes, s, &base_ext, &springs, &guess, options)?;
+                let (mut e, its) = reverse::solve(shapes, s, &base_ext, &springs, &guess, options)?;
                 reverse_iterations.push(its);
+                if let Some(a) = &placed {
+                    keep_anchor_upright(&mut e, &guess, a.vertices.len());
+                }
                 e
             };
             let mut p = shapes.positions(s).to_vec();
@@ -315,5 +318,22 @@ impl VolumetricBlend {
             inversions,
             anchor_motion: motion,
         })
+    }
+}
+
+/// A cube tied to a nearly flat patch (an open mesh) has turned-over equilibria: the same
+/// vertex set with permuted labels, i.e. the cube rotated by up to 180°. When the reverse
+/// solve ends in one, its anchor (the last `anchor` entries of `extra`) turns by more than 90°
+/// against the guess, which carries it rigidly with its surface neighbourhood; the blend would
+/// then turn the whole shape by the slerp towards that rotation. Such an anchor is replaced by
+/// its guess.
+fn keep_anchor_upright(extra: &mut [Point], guess: &[Point], anchor: usize) {
+    let k = extra.len() - anchor;
+    let fit = crate::geom::kabsch(&guess[k..], &extra[k..], &[]);
+    let q = nalgebra::UnitQuaternion::from_rotation_matrix(
+        &nalgebra::Rotation3::from_matrix_unchecked(fit.rotation),
+    );
+    if q.angle() > std::f64::consts::FRAC_PI_2 {
+        extra[k..].copy_from_slice(&guess[k..]);
     }
 }
