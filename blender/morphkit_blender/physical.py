@@ -69,9 +69,16 @@ def _obstacle(o, obj):
     return morphkit.Obstacle.mesh(V, F, name=o.name)
 
 
+def _volume(obj):
+    """The `interior` and `anchor` arguments of the object's blend (None: not asked for)."""
+    interior = getattr(obj, "morphkit_interior", "none")
+    anchor = "auto" if getattr(obj, "morphkit_anchor", False) else None
+    return (None if interior == "none" else interior), anchor
+
+
 def _signature(obj, scene=None):
     keys = obj.data.shape_keys.key_blocks
-    digest = [len(obj.data.vertices), len(obj.data.polygons), keys[0].name]
+    digest = [len(obj.data.vertices), len(obj.data.polygons), keys[0].name, _volume(obj)]
     if scene is not None:
         obstacles = obstacles_of(scene, obj)
         for o in obstacles:
@@ -99,13 +106,18 @@ def solver_for(obj, scene=None):
     base = geometry.key_coords(keys[0])
     targets = [geometry.key_coords(k) for k in target_keys(obj)]
     obstacles = [_obstacle(o, obj) for o in obstacles_of(scene, obj)] if scene else []
+    interior, anchor = _volume(obj)
     if obstacles:
         pulls = [(v, [(0.0, p)]) for v, p in sorted(pulls_of(obj, scene).items())]
-        blend = morphkit.SceneBlend(base, targets, F, obstacles=obstacles, pulls=pulls)
+        blend = morphkit.SceneBlend(
+            base, targets, F, obstacles=obstacles, pulls=pulls, interior=interior, anchor=anchor
+        )
     else:
-        blend = morphkit.PhysicalBlend(base, targets, F)
+        blend = morphkit.PhysicalBlend(base, targets, F, interior=interior, anchor=anchor)
     # The predictor is taken now: it must not touch the blend while a job solves with it.
-    _solvers[obj.name] = (sig, blend, F, blend.predictor())
+    # With an interior or an anchor there is none, and live mode solves synchronously.
+    predictor = blend.predictor() if interior is None and anchor is None else None
+    _solvers[obj.name] = (sig, blend, F, predictor)
     return blend, F
 
 
@@ -200,7 +212,7 @@ def _request(obj, scene):
     blend, _ = solver_for(obj, scene)
     state, w, pulls = _state(obj, scene)
     _last[obj.name] = state
-    if not obj.morphkit_live_preview:
+    if not obj.morphkit_live_preview or _solvers[obj.name][3] is None:
         obj["morphkit_latency_ms"] = 1e3 * solve_into_key(obj, scene)
         return
     t0 = time.perf_counter()
@@ -424,6 +436,11 @@ class MORPHKIT_OT_export_scene(bpy.types.Operator):
             "[output]",
             f"fps = {scene.render.fps / scene.render.fps_base}",
         ]
+        interior, anchor = _volume(obj)
+        if interior or anchor:
+            lines += ["", "[blend]"]
+            lines += [f"interior = {json.dumps(interior)}"] if interior else []
+            lines += [f"anchor = {json.dumps(anchor)}"] if anchor else []
         for o in obstacles_of(scene, obj):
             ob = _obstacle_mesh(o, obj)
             name = f"obstacle_{clean(o.name)}.obj"
@@ -481,6 +498,9 @@ class MORPHKIT_PT_physical(bpy.types.Panel):
         layout.prop(obj, "morphkit_live")
         if obj.morphkit_live:
             layout.prop(obj, "morphkit_live_preview")
+        row = layout.row(align=True)
+        row.prop(obj, "morphkit_interior", text="Interior")
+        row.prop(obj, "morphkit_anchor")
         if obj.data.shape_keys is not None:
             col = layout.column(align=True)
             for k in target_keys(obj):
@@ -518,6 +538,21 @@ def register():
         "(off: every change waits for its solve)",
         default=True,
     )
+    bpy.types.Object.morphkit_interior = bpy.props.EnumProperty(
+        name="Interior",
+        description="Internal springs that keep the volume (Ma et al. Sec. 3.1); closed parts only",
+        items=[
+            ("none", "None", "Surface springs only"),
+            ("lattice", "Lattice", "A lattice of internal springs inside each closed part"),
+        ],
+        default="none",
+    )
+    bpy.types.Object.morphkit_anchor = bpy.props.BoolProperty(
+        name="Anchor",
+        description="A rigid anchor inside the mesh that the blend follows (Sec. 3.4), instead "
+        "of the vertices that stay put",
+        default=False,
+    )
     for c in classes:
         bpy.utils.register_class(c)
     bpy.app.handlers.depsgraph_update_post.append(_live_handler)
@@ -535,6 +570,8 @@ def unregister():
     finish_live()
     del bpy.types.Object.morphkit_live
     del bpy.types.Object.morphkit_live_preview
+    del bpy.types.Object.morphkit_interior
+    del bpy.types.Object.morphkit_anchor
     _solvers.clear()
     _last.clear()
     _wanted.clear()

@@ -151,6 +151,26 @@ check(err < 1e-6, f"synchronous live update differs by {err}")
 cyl.morphkit_live_preview = True
 cyl.morphkit_live = False
 
+# Internal springs (the cylinder is closed): the Physical update equals the module's blend with
+# a lattice interior; live mode then solves synchronously (no predictor with an interior).
+cyl.morphkit_interior = "lattice"
+key.value = 0.5
+check(bpy.ops.morphkit.physical_update() == {"FINISHED"}, "physical_update with an interior failed")
+ref_interior = morphkit.PhysicalBlend(V0, [V1], F_b, interior="lattice")
+err = float(np.abs(result_key() - ref_interior.solve(0.5)).max()) / diag(V0)
+check(err < 1e-6, f"the physical key with an interior differs from the module by {err}")
+check(float(np.abs(result_key() - ref).max()) > 1e-6 * diag(V0), "the interior changed nothing")
+cyl.morphkit_live = True
+key.value = 0.6
+bpy.context.view_layer.update()
+physical._live_handler(bpy.context.scene)
+check(cyl["morphkit_showing"] == "physical", "live mode with an interior shows a preview")
+err = float(np.abs(result_key() - ref_interior.solve(0.6)).max()) / diag(V0)
+check(err < 1e-6, f"live update with an interior differs by {err}")
+cyl.morphkit_live = False
+cyl.morphkit_interior = "none"
+results["interior_key_error"] = err
+
 # A pull: an Empty parented to the mesh holds a free vertex.
 free = int(np.argmax(np.linalg.norm(V1 - V0, axis=1)))  # moves, so not auto-fixed
 
