@@ -18,69 +18,19 @@
 //! (default) → 0.964 % (refined) → 0.799 % (local stretch) → 0.741 % (refined, local stretch,
 //! area: −25.5 %); cat ↔ dog 2.110 % → 2.074 % → 2.003 % → 1.713 % → 1.667 % (−21.0 %). The
 //! issue's target of a 25 % lower mean on both pairs is **not** reached on cat ↔ dog; see
-//! README and `examples/cycle_diagnosis/` for where the error comes from (`explore`,
-//! ignored, runs variants: `EXPLORE="refine,two_way,combine,radius,max"`).
+//! README and `examples/cycle_diagnosis/` for where the error comes from (its `explore` mode
+//! measures variants: `EXPLORE="refine,two_way,combine,radius,max"`).
 
 mod common;
 
 use morphkit::io::{read_mesh, read_shape_set};
-use morphkit::mesh::{Point, TriMesh};
 use morphkit::transfer::{
-    correspond, correspondence_quality, cycle_consistency, CorrespondenceOptions, GradientCombine,
-    GradientFrame, Markers, RefineOptions, TransferOptions, TriangleWeighting,
+    correspond, CorrespondenceOptions, GradientCombine, GradientFrame, Markers, RefineOptions,
+    TransferOptions, TriangleWeighting,
 };
 use std::path::PathBuf;
-use std::time::Instant;
 
-struct Pair {
-    name: &'static str,
-    /// The mesh the correspondence is computed on.
-    a_corr: TriMesh,
-    /// The mesh the frames are measured from (same connectivity as `a_corr`).
-    a_ref: TriMesh,
-    frames: Vec<Vec<Point>>,
-    b: TriMesh,
-    markers: Markers,
-}
-
-#[derive(Debug)]
-struct Measured {
-    cycle_mean: f64,
-    cycle_max: f64,
-    folds: usize,
-    flipped: usize,
-    correspond_s: f64,
-    normal_pass: f64,
-    coverage: f64,
-}
-
-fn measure_with(p: &Pair, copts: &CorrespondenceOptions, topts: TransferOptions) -> Measured {
-    let t0 = Instant::now();
-    let fwd = correspond(&p.a_corr, &p.b, &p.markers, copts).unwrap();
-    let correspond_s = t0.elapsed().as_secs_f64();
-    let bwd = correspond(&p.b, &p.a_corr, &p.markers.reversed(), copts).unwrap();
-    let c = cycle_consistency(
-        &p.a_ref,
-        &p.frames,
-        &p.b,
-        &fwd.correspondence,
-        &bwd.correspondence,
-        &topts,
-    )
-    .unwrap();
-    let q = correspondence_quality(&fwd.correspondence);
-    let m = Measured {
-        cycle_mean: c.mean,
-        cycle_max: c.max,
-        folds: c.forward_sharp_folds.iter().sum(),
-        flipped: c.forward_flipped.iter().sum(),
-        correspond_s,
-        normal_pass: q.normal_pass_fraction,
-        coverage: q.source_coverage,
-    };
-    eprintln!("{}: {m:?}", p.name);
-    m
-}
+use common::{measure_with, Measured, Pair};
 
 /// The one-stage correspondence of before issue 9: one-way matching, `--combine mean`,
 /// gradients carried over in the world frame.
@@ -195,114 +145,20 @@ fn check(p: &Pair, time_budget: Option<f64>, best_lower: f64) {
     }
 }
 
-/// Horse → camel with the ten horse poses, or `None` (after a skip line naming `test`) when
-/// `MORPHKIT_DATA` is unset.
-fn horse_camel(test: &str) -> Option<Pair> {
-    let (Some(h), Some(c), Some(mk)) = (
-        common::data_file("sumner-horse-camel/horse-reference.obj.gz"),
-        common::data_file("sumner-horse-camel/camel-reference.obj.gz"),
-        common::data_file("sumner-horse-camel/markers-horse-camel.json"),
-    ) else {
-        common::skip(test);
-        return None;
-    };
-    let horse = read_mesh(&h).unwrap();
-    let dir = common::data_dir().unwrap().join("sumner-horse-camel");
-    let paths: Vec<PathBuf> = (1..=10)
-        .map(|i| dir.join(format!("horse-{i:02}.obj.gz")))
-        .collect();
-    let poses = read_shape_set(&paths).unwrap();
-    Some(Pair {
-        name: "horse↔camel",
-        a_corr: horse.clone(),
-        a_ref: horse,
-        frames: poses.all_positions().to_vec(),
-        b: read_mesh(&c).unwrap(),
-        markers: Markers::read(&mk).unwrap(),
-    })
-}
-
 #[test]
 fn horse_camel_cycle_consistency_improves() {
-    let Some(p) = horse_camel("horse_camel_cycle_consistency_improves") else {
-        return;
+    let Some(p) = common::horse_camel() else {
+        return common::skip("horse_camel_cycle_consistency_improves");
     };
     check(&p, Some(2.0), 25.0);
 }
 
 #[test]
 fn cat_dog_cycle_consistency_improves() {
-    let (Some(cat), Some(dog), Some(mk)) = (
-        common::data_file("lowpoly-cat-dog/cat-reference.obj"),
-        common::data_file("lowpoly-cat-dog/dog-reference.obj"),
-        common::data_file("lowpoly-cat-dog/markers-cat-dog.json"),
-    ) else {
+    let Some(p) = common::cat_dog() else {
         return common::skip("cat_dog_cycle_consistency_improves");
     };
-    let dir = common::data_dir().unwrap().join("lowpoly-cat-dog/cat-run");
-    let paths: Vec<PathBuf> = (1..=36)
-        .map(|i| dir.join(format!("cat-run-{i:02}.obj.gz")))
-        .collect();
-    let run = read_shape_set(&paths).unwrap();
-    let p = Pair {
-        name: "cat↔dog",
-        a_corr: read_mesh(&cat).unwrap(),
-        // The run frames are at 0.1× the reference scale: frame 0 is the gradients' reference.
-        a_ref: run.mesh(0),
-        frames: run.all_positions().to_vec(),
-        b: read_mesh(&dog).unwrap(),
-        markers: Markers::read(&mk).unwrap(),
-    };
     check(&p, None, 20.0);
-}
-
-/// Measures any variants on both pairs, for tuning: `EXPLORE="r,w,c,radius,max[,wc/wc/…[,wi[,a[,l]]]];…"`
-/// with r = 1 to refine, w = 1 for two-way, c = m(ean), n(earest) or i(nverse distance), the
-/// radius factor, the most matches, the closest-point weights, the identity weight, `a`
-/// for area-weighted solves and `l` for the local-stretch frame.
-#[test]
-#[ignore = "a tuning tool, not a check: it prints measurements of the EXPLORE variants and asserts nothing; run it with --ignored"]
-fn explore() {
-    let Some(hp) = horse_camel("explore") else {
-        return;
-    };
-    let spec = std::env::var("EXPLORE").unwrap_or_default();
-    for item in spec.split(';').filter(|s| !s.is_empty()) {
-        let f: Vec<&str> = item.split(',').collect();
-        let mut refine = (f[0] == "1").then(RefineOptions::default);
-        if let Some(r) = refine.as_mut() {
-            if let Some(w) = f.get(5) {
-                r.closest_weights = w.split('/').map(|x| x.parse().unwrap()).collect();
-            }
-            if let Some(w) = f.get(6) {
-                r.identity = w.parse().unwrap();
-            }
-        }
-        let o = CorrespondenceOptions {
-            refine,
-            two_way: f[1] == "1",
-            radius_factor: f[3].parse().unwrap(),
-            max_matches: f[4].parse().unwrap(),
-            ..Default::default()
-        };
-        let combine = match f[2] {
-            "m" => GradientCombine::Mean,
-            "n" => GradientCombine::Nearest,
-            _ => GradientCombine::InverseDistance,
-        };
-        let mut t = TransferOptions {
-            combine,
-            ..Default::default()
-        };
-        if f.get(7) == Some(&"a") {
-            t.solver.weighting = morphkit::transfer::TriangleWeighting::Area;
-        }
-        if f.get(8) == Some(&"l") {
-            t.frame = GradientFrame::LocalStretch;
-        }
-        eprintln!("== {item}");
-        measure_with(&hp, &o, t);
-    }
 }
 
 /// Issue 9, `--combine`: a self-transfer with identity markers is exact with the default

@@ -1,71 +1,24 @@
 //! Issue 9, diagnosis of the cycle-consistency error (horse → camel → horse, cat → dog →
 //! cat). **A diagnostic, not a check**: it prints where the round trip's error comes from
 //! (the checks are in `tests/transfer_quality_real_data.rs`). Run it with
-//! `MORPHKIT_DATA=… cargo run --release -p morphkit --example cycle_diagnosis -- [diagnosis|variants|folds]`
-//! (default `diagnosis`; `DIAG_DUMP=dir` also writes per-vertex error maps as CSV there).
+//! `MORPHKIT_DATA=… cargo run --release -p morphkit --example cycle_diagnosis -- [diagnosis|variants|folds|explore]`
+//! (default `diagnosis`; `DIAG_DUMP=dir` also writes per-vertex error maps as CSV there;
+//! `explore` measures the correspondence and transfer variants given in `EXPLORE`).
 
 #[path = "../../tests/common/mod.rs"]
 mod common;
 mod studies;
 
-use studies::{combine_variants, cycle_error_diagnosis, fold_locations};
+use studies::{combine_variants, cycle_error_diagnosis, explore, fold_locations};
 
-use morphkit::io::{read_mesh, read_shape_set};
 use morphkit::mesh::{Point, TriMesh};
 use morphkit::transfer::{
     correspond, AnimationTransfer, Correspondence, CorrespondenceOptions, GradientFrame,
-    GradientOperator, Markers, TransferOptions, TranslationMode,
+    GradientOperator, TransferOptions, TranslationMode,
 };
 use nalgebra::{Matrix3, Vector3};
-use std::path::PathBuf;
 
-struct Pair {
-    name: &'static str,
-    a_corr: TriMesh,
-    a_ref: TriMesh,
-    frames: Vec<Vec<Point>>,
-    b: TriMesh,
-    markers: Markers,
-}
-
-fn horse() -> Option<Pair> {
-    let h = common::data_file("sumner-horse-camel/horse-reference.obj.gz")?;
-    let c = common::data_file("sumner-horse-camel/camel-reference.obj.gz")?;
-    let mk = common::data_file("sumner-horse-camel/markers-horse-camel.json")?;
-    let horse = read_mesh(&h).unwrap();
-    let dir = common::data_dir().unwrap().join("sumner-horse-camel");
-    let paths: Vec<PathBuf> = (1..=10)
-        .map(|i| dir.join(format!("horse-{i:02}.obj.gz")))
-        .collect();
-    let poses = read_shape_set(&paths).unwrap();
-    Some(Pair {
-        name: "horse",
-        a_corr: horse.clone(),
-        a_ref: horse,
-        frames: poses.all_positions().to_vec(),
-        b: read_mesh(&c).unwrap(),
-        markers: Markers::read(&mk).unwrap(),
-    })
-}
-
-fn cat() -> Option<Pair> {
-    let cat = common::data_file("lowpoly-cat-dog/cat-reference.obj")?;
-    let dog = common::data_file("lowpoly-cat-dog/dog-reference.obj")?;
-    let mk = common::data_file("lowpoly-cat-dog/markers-cat-dog.json")?;
-    let dir = common::data_dir().unwrap().join("lowpoly-cat-dog/cat-run");
-    let paths: Vec<PathBuf> = (1..=36)
-        .map(|i| dir.join(format!("cat-run-{i:02}.obj.gz")))
-        .collect();
-    let run = read_shape_set(&paths).unwrap();
-    Some(Pair {
-        name: "cat",
-        a_corr: read_mesh(&cat).unwrap(),
-        a_ref: run.mesh(0),
-        frames: run.all_positions().to_vec(),
-        b: read_mesh(&dog).unwrap(),
-        markers: Markers::read(&mk).unwrap(),
-    })
-}
+use common::{cat_dog as cat, horse_camel as horse, Pair};
 
 fn v(p: Point) -> Vector3<f64> {
     Vector3::new(p[0], p[1], p[2])
@@ -445,8 +398,9 @@ fn main() {
         "diagnosis" => cycle_error_diagnosis(),
         "variants" => combine_variants(),
         "folds" => fold_locations(),
+        "explore" => explore(),
         other => {
-            eprintln!("unknown diagnostic '{other}': use diagnosis, variants or folds");
+            eprintln!("unknown diagnostic '{other}': use diagnosis, variants, folds or explore");
             std::process::exit(2);
         }
     }

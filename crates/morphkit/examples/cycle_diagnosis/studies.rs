@@ -393,3 +393,49 @@ pub fn fold_locations() {
         eprintln!("  all target triangles by the same measure: {hist:?}");
     }
 }
+
+/// Measures any variants on both pairs, for tuning (prints, asserts nothing): `EXPLORE="r,w,c,radius,max[,wc/wc/…[,wi[,a[,l]]]];…"`
+/// with r = 1 to refine, w = 1 for two-way, c = m(ean), n(earest) or i(nverse distance), the
+/// radius factor, the most matches, the closest-point weights, the identity weight, `a`
+/// for area-weighted solves and `l` for the local-stretch frame.
+pub fn explore() {
+    let spec = std::env::var("EXPLORE").unwrap_or_default();
+    for item in spec.split(';').filter(|s| !s.is_empty()) {
+        let f: Vec<&str> = item.split(',').collect();
+        let mut refine = (f[0] == "1").then(morphkit::transfer::RefineOptions::default);
+        if let Some(r) = refine.as_mut() {
+            if let Some(w) = f.get(5) {
+                r.closest_weights = w.split('/').map(|x| x.parse().unwrap()).collect();
+            }
+            if let Some(w) = f.get(6) {
+                r.identity = w.parse().unwrap();
+            }
+        }
+        let o = CorrespondenceOptions {
+            refine,
+            two_way: f[1] == "1",
+            radius_factor: f[3].parse().unwrap(),
+            max_matches: f[4].parse().unwrap(),
+            ..Default::default()
+        };
+        let combine = match f[2] {
+            "m" => morphkit::transfer::GradientCombine::Mean,
+            "n" => morphkit::transfer::GradientCombine::Nearest,
+            _ => morphkit::transfer::GradientCombine::InverseDistance,
+        };
+        let mut t = TransferOptions {
+            combine,
+            ..Default::default()
+        };
+        if f.get(7) == Some(&"a") {
+            t.solver.weighting = morphkit::transfer::TriangleWeighting::Area;
+        }
+        if f.get(8) == Some(&"l") {
+            t.frame = GradientFrame::LocalStretch;
+        }
+        eprintln!("== {item}");
+        for p in [horse(), cat()].into_iter().flatten() {
+            common::measure_with(&p, &o, t.clone());
+        }
+    }
+}

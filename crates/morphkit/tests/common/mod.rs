@@ -73,3 +73,104 @@ pub fn bent_bar() -> morphkit::mesh::ShapeSet {
     )
     .unwrap()
 }
+
+/// A source with frames and a target, for transfer quality (issue 9): the correspondence is
+/// computed on `a_corr`, the frames are measured from `a_ref` (same connectivity).
+pub struct Pair {
+    pub name: &'static str,
+    pub a_corr: morphkit::mesh::TriMesh,
+    pub a_ref: morphkit::mesh::TriMesh,
+    pub frames: Vec<Vec<morphkit::mesh::Point>>,
+    pub b: morphkit::mesh::TriMesh,
+    pub markers: morphkit::transfer::Markers,
+}
+
+/// Horse → camel with the ten horse poses; `None` when `MORPHKIT_DATA` is unset.
+pub fn horse_camel() -> Option<Pair> {
+    use morphkit::io::{read_mesh, read_shape_set};
+    let h = data_file("sumner-horse-camel/horse-reference.obj.gz")?;
+    let c = data_file("sumner-horse-camel/camel-reference.obj.gz")?;
+    let mk = data_file("sumner-horse-camel/markers-horse-camel.json")?;
+    let horse = read_mesh(&h).unwrap();
+    let dir = data_dir().unwrap().join("sumner-horse-camel");
+    let paths: Vec<PathBuf> = (1..=10)
+        .map(|i| dir.join(format!("horse-{i:02}.obj.gz")))
+        .collect();
+    let poses = read_shape_set(&paths).unwrap();
+    Some(Pair {
+        name: "horse↔camel",
+        a_corr: horse.clone(),
+        a_ref: horse,
+        frames: poses.all_positions().to_vec(),
+        b: read_mesh(&c).unwrap(),
+        markers: morphkit::transfer::Markers::read(&mk).unwrap(),
+    })
+}
+
+/// Cat → dog with the 36 frames of the cat's run; `None` when `MORPHKIT_DATA` is unset. The
+/// run frames are at 0.1× the reference scale: frame 0 is the gradients' reference.
+pub fn cat_dog() -> Option<Pair> {
+    use morphkit::io::{read_mesh, read_shape_set};
+    let cat = data_file("lowpoly-cat-dog/cat-reference.obj")?;
+    let dog = data_file("lowpoly-cat-dog/dog-reference.obj")?;
+    let mk = data_file("lowpoly-cat-dog/markers-cat-dog.json")?;
+    let dir = data_dir().unwrap().join("lowpoly-cat-dog/cat-run");
+    let paths: Vec<PathBuf> = (1..=36)
+        .map(|i| dir.join(format!("cat-run-{i:02}.obj.gz")))
+        .collect();
+    let run = read_shape_set(&paths).unwrap();
+    Some(Pair {
+        name: "cat↔dog",
+        a_corr: read_mesh(&cat).unwrap(),
+        a_ref: run.mesh(0),
+        frames: run.all_positions().to_vec(),
+        b: read_mesh(&dog).unwrap(),
+        markers: morphkit::transfer::Markers::read(&mk).unwrap(),
+    })
+}
+
+/// The quality measures of one correspondence and transfer setting on a [`Pair`].
+#[derive(Debug)]
+pub struct Measured {
+    pub cycle_mean: f64,
+    pub cycle_max: f64,
+    pub folds: usize,
+    pub flipped: usize,
+    pub correspond_s: f64,
+    pub normal_pass: f64,
+    pub coverage: f64,
+}
+
+/// Correspondence both ways with `copts`, then the cycle consistency with `topts`; printed.
+pub fn measure_with(
+    p: &Pair,
+    copts: &morphkit::transfer::CorrespondenceOptions,
+    topts: morphkit::transfer::TransferOptions,
+) -> Measured {
+    use morphkit::transfer::{correspond, correspondence_quality, cycle_consistency};
+    let t0 = std::time::Instant::now();
+    let fwd = correspond(&p.a_corr, &p.b, &p.markers, copts).unwrap();
+    let correspond_s = t0.elapsed().as_secs_f64();
+    let bwd = correspond(&p.b, &p.a_corr, &p.markers.reversed(), copts).unwrap();
+    let c = cycle_consistency(
+        &p.a_ref,
+        &p.frames,
+        &p.b,
+        &fwd.correspondence,
+        &bwd.correspondence,
+        &topts,
+    )
+    .unwrap();
+    let q = correspondence_quality(&fwd.correspondence);
+    let m = Measured {
+        cycle_mean: c.mean,
+        cycle_max: c.max,
+        folds: c.forward_sharp_folds.iter().sum(),
+        flipped: c.forward_flipped.iter().sum(),
+        correspond_s,
+        normal_pass: q.normal_pass_fraction,
+        coverage: q.source_coverage,
+    };
+    eprintln!("{}: {m:?}", p.name);
+    m
+}
