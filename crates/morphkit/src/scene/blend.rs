@@ -6,7 +6,7 @@ use super::obstacle::Obstacle;
 use super::pulls::{Pull, PullKind};
 use super::SceneError;
 use crate::mesh::{bbox_diagonal, Point, ShapeSet};
-use crate::springs::interior::anchor::apply_inverse;
+use crate::springs::interior::anchor::targets_in_frame;
 use crate::springs::interior::{AnchorMotion, InteriorReport};
 use crate::springs::{
     AnchorOptions, AnchorPlacement, BlendOptions, BlendPredictor, FrameSolver, FrameStats,
@@ -284,17 +284,8 @@ impl FrameContext<'_> {
             Some(m) => Some(m.at(&weights.coefficients(self.shapes)?)),
             None => None,
         };
-        let targets: Vec<_> = self
-            .pulls
-            .iter()
-            .map(|p| {
-                let mut t = p.target_at(frame);
-                if let Some(m) = &motion {
-                    t.position = apply_inverse(m, t.position);
-                }
-                t
-            })
-            .collect();
+        let world = self.pulls.iter().map(|p| p.target_at(frame)).collect();
+        let targets = targets_in_frame(motion.as_ref(), world);
         let placed: Vec<_> = self.obstacles.iter().map(|o| o.placed(frame)).collect();
         let (result, contacts, collision) = solve_frame(
             solver,

@@ -239,6 +239,24 @@ pub fn apply_inverse(t: &RigidTransform, p: Point) -> Point {
     [q.x, q.y, q.z]
 }
 
+/// Point targets given in the world, in the frame that `t` maps to the world (an anchored
+/// blend solves in its anchor's frame).
+pub fn targets_in_frame(
+    t: Option<&RigidTransform>,
+    targets: Vec<crate::springs::PointTarget>,
+) -> Vec<crate::springs::PointTarget> {
+    match t {
+        None => targets,
+        Some(t) => targets
+            .into_iter()
+            .map(|p| crate::springs::PointTarget {
+                position: apply_inverse(t, p.position),
+                ..p
+            })
+            .collect(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

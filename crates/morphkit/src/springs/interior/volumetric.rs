@@ -264,19 +264,13 @@ impl VolumetricBlend {
                 num_vertices: n,
             });
         }
-        let local: Vec<_> = match &self.motion {
+        let frame = match &self.motion {
             Some(m) if !targets.is_empty() => {
-                let frame = m.at(&weights.coefficients(self.surface.len())?);
-                targets
-                    .iter()
-                    .map(|t| crate::springs::PointTarget {
-                        position: apply_inverse(&frame, t.position),
-                        ..*t
-                    })
-                    .collect()
+                Some(m.at(&weights.coefficients(self.surface.len())?))
             }
-            _ => targets.to_vec(),
+            _ => None,
         };
+        let local = anchor::targets_in_frame(frame.as_ref(), targets.to_vec());
         let r = self.blend.solve_with(weights, &local, None)?;
         self.finish(weights, r)
     }
