@@ -8,11 +8,15 @@
 //!   compressed springs is followed to the trust-region boundary instead of being clamped away.
 //!   The factor is refreshed every [`BlendOptions::refactor_every`] steps, except while it still
 //!   fits the Hessian (the last inner solve converged within
-//!   [`BlendOptions::keep_factor_cg`] iterations), and whenever the inner iteration runs out
+//!   [`BlendOptions::keep_factor_cg`] iterations, or stopped at the trust-region boundary in
+//!   its first), and whenever the inner iteration runs out
 //!   of its budget without progress. Near the solution this is Newton's method with quadratic
 //!   convergence.
 //! - [`projected_newton`]: a fresh factorization of the projected Hessian every step and an
 //!   Armijo backtracking line search.
+//!
+//! A refreshed factor and the CG operator are assembled in one pass over the terms
+//! ([`EnergyTerm::add_hessians`]): both Hessians share the terms' geometry.
 //!
 //! Every decision (budgets, radius updates, refactorization, regularization) depends on the
 //! iterates alone, never on timings, so a solve is a deterministic function of its inputs.
@@ -35,6 +39,9 @@ pub(crate) struct Workspace {
     /// Whether the current solve factors with [`Self::double`].
     pub use_double: bool,
     pub blocks: BlockHessian,
+    /// Exact-Hessian blocks when both Hessians are assembled in one pass
+    /// ([`EnergyTerm::add_hessians`]).
+    pub blocks_exact: BlockHessian,
     /// Scalar values of the exact Hessian (the CG operator).
     pub exact: Vec<f64>,
     /// Scalar values of the projected Hessian (the factorization input).
@@ -48,6 +55,7 @@ impl Workspace {
             chol,
             double: None,
             use_double: false,
+            blocks_exact: blocks.clone(),
             blocks,
             exact: vec![0.0; nnz],
             projected: vec![0.0; nnz],
@@ -101,6 +109,21 @@ impl Problem<'_> {
             &mut ws.projected
         };
         self.system.assemble(&ws.blocks, out);
+    }
+
+    /// Assembles the projected Hessian into `ws.projected` and the exact one into `ws.exact`,
+    /// both at `x`, in one pass over the terms (the same values as two [`Self::hessian`]
+    /// calls).
+    fn hessians(&self, ws: &mut Workspace, x: &[f64]) {
+        ws.blocks.clear();
+        ws.blocks_exact.clear();
+        for (t, p) in self.terms.iter().zip(self.params) {
+            t.add_hessians(p, x, &mut ws.blocks, &mut ws.blocks_exact);
+        }
+        self.held.mask_hessian(&mut ws.blocks);
+        self.held.mask_hessian(&mut ws.blocks_exact);
+        self.system.assemble(&ws.blocks, &mut ws.projected);
+        self.system.assemble(&ws.blocks_exact, &mut ws.exact);
     }
 
     /// Factorizes `ws.projected`, adding the smallest multiple of the identity (from a fixed
@@ -219,7 +242,12 @@ pub(crate) fn trust_region(
         let fits = keep > 0 && last_converged && last_cg <= keep;
         if refactor || (every > 0 && accepted_since >= every && !fits) {
             accepted_since = 0;
-            prob.hessian(ws, x, HessianKind::Projected, false);
+            if exact_current {
+                prob.hessian(ws, x, HessianKind::Projected, false);
+            } else {
+                prob.hessians(ws, x);
+                exact_current = true;
+            }
             prob.factorize(ws, stats)?;
             refactor = false;
         }
@@ -255,7 +283,11 @@ pub(crate) fn trust_region(
             continue;
         };
         last_cg = stats.cg_iterations - cg_before;
-        last_converged = step.termination == Termination::Converged;
+        // A step that reached the trust-region boundary in its first CG iteration is the
+        // preconditioned steepest-descent step, cut short by the radius: nothing says that
+        // the factor misfits, so it is kept like one whose inner solve converged quickly.
+        last_converged = step.termination == Termination::Converged
+            || (step.termination == Termination::Boundary && last_cg <= 1);
         extend = if step.termination == Termination::Budget {
             (2 * extend).min(10)
         } else {

@@ -204,10 +204,11 @@ pub(crate) fn predicted_bytes(
     let scalar_nnz = 9 * pairs + 6 * nv;
     let factor = 9 * l_vertex;
     // 8 (or 4) bytes per factor value, 16 per scalar entry (index + value), two value arrays,
-    // the blocks; a single-precision factor also keeps the matrix rounded to f32.
+    // two sets of blocks (projected and exact, assembled in one pass); a single-precision
+    // factor also keeps the matrix rounded to f32.
     let (per_value, rounded) = match precision {
         Precision::Double => (8, 0),
         Precision::Single => (4, 4 * scalar_nnz),
     };
-    Ok(per_value * factor + 16 * scalar_nnz + 16 * scalar_nnz + rounded + 72 * (nv + pairs))
+    Ok(per_value * factor + 16 * scalar_nnz + 16 * scalar_nnz + rounded + 2 * 72 * (nv + pairs))
 }

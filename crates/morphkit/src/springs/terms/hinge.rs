@@ -221,14 +221,19 @@ impl HingeTerm {
         let eh = e / le;
         let n1 = e.cross(&(c - a));
         let n2 = (d - a).cross(&e);
-        let rot = Matrix3::identity() * cs + skew(&eh) * sn;
-        let rho = n2 * ib2 - rot * n1 * ib1;
-        let proj = (Matrix3::identity() - eh * eh.transpose()) / le;
-        let sn1 = skew(&n1) * sn;
-        let dn1 = [skew(&(c - b)), -skew(&(c - a)), skew(&e), Matrix3::zeros()];
-        let dn2 = [skew(&(b - d)), skew(&(d - a)), Matrix3::zeros(), -skew(&e)];
-        let de = [-proj, proj, Matrix3::zeros(), Matrix3::zeros()];
-        let j = std::array::from_fn(|v| dn2[v] * ib2 - (rot * dn1[v] - sn1 * de[v]) * ib1);
+        let rho = n2 * ib2 - (n1 * cs + eh.cross(&n1) * sn) * ib1;
+        // R(Θ̄)[w]× with R = cos Θ̄ I + sin Θ̄ [ê]×, using [ê]×[w]× = w êᵀ − (ê·w) I.
+        let rot_skew = |w: Vector3<f64>| {
+            skew(&w) * cs + (w * eh.transpose() - Matrix3::identity() * eh.dot(&w)) * sn
+        };
+        // sin Θ̄ [n₁]× ∂ê/∂b, with ∂ê/∂b = (I − ê êᵀ)/‖e‖ = −∂ê/∂a.
+        let np = (skew(&n1) - n1.cross(&eh) * eh.transpose()) * (sn / le);
+        let j = [
+            skew(&(b - d)) * ib2 - (rot_skew(c - b) + np) * ib1,
+            skew(&(d - a)) * ib2 + (rot_skew(c - a) + np) * ib1,
+            -rot_skew(e) * ib1,
+            -skew(&e) * ib2,
+        ];
         (rho, j)
     }
 }
@@ -252,54 +257,65 @@ impl HingeTerm {
     /// mapped to the corners by $e = b - a$, $u_1 = c - a$, $u_2 = d - a$. The tests check it
     /// against differences of the analytic gradient.
     fn add_exact_hessian(&self, p: &TermParameters, x: &[f64], h: &mut BlockHessian) {
-        let id = Matrix3::<f64>::identity();
         for k in 0..self.hinges.len() {
             let hv = self.hinges[k];
             let pos = hv.map(|v| v3(x, v));
             let (r, j) = self.residual_at(&p.values, k, pos);
-            // d enters only through u2 = d − a, whose blocks are constant.
-            let [a, b, c, _] = pos;
-            let pv = &p.values[4 * k..4 * k + 4];
-            let (cs, sn, ib1, ib2) = (pv[0], pv[1], pv[2], pv[3]);
-            let (e, u1) = (b - a, c - a);
-            let le = e.norm().max(f64::MIN_POSITIVE);
-            let eh = e / le;
-            let n1 = e.cross(&u1);
-            // Second derivatives in (e, u1, u2): hy[p][q] = ∂²f/∂p∂q.
-            let mut hy = [[Matrix3::<f64>::zeros(); 3]; 3];
-            let (sr, ss) = (skew(&r), skew(&r.cross(&eh)));
-            // ib2 r·(u2 × e)
-            hy[2][0] -= sr * ib2;
-            hy[0][2] += sr * ib2;
-            // −ib1 cs r·(e × u1)
-            hy[0][1] += sr * (ib1 * cs);
-            hy[1][0] -= sr * (ib1 * cs);
-            // −ib1 sn ê·m, m = n1 × r. On an edge of zero length ê is undefined; there n1 = 0,
-            // so m = 0 and these blocks vanish in the limit: they are left out where they are
-            // not finite.
-            let m = n1.cross(&r);
-            let me = m.dot(&eh);
-            let mut g = [[Matrix3::<f64>::zeros(); 3]; 3];
-            g[0][0] = (eh * eh.transpose() * (3.0 * me)
-                - id * me
-                - m * eh.transpose()
-                - eh * m.transpose())
-                / (le * le);
-            let de = (id - eh * eh.transpose()) / le;
-            let dm_e = sr * skew(&u1);
-            let dm_u1 = -sr * skew(&e);
-            g[0][0] += de.transpose() * dm_e + dm_e.transpose() * de;
-            g[0][1] += de.transpose() * dm_u1 - ss;
-            g[1][0] += dm_u1.transpose() * de + ss;
-            if g.iter().flatten().all(|b| b.iter().all(|v| v.is_finite())) {
-                for pp in 0..2 {
-                    for qq in 0..2 {
-                        hy[pp][qq] -= g[pp][qq] * (ib1 * sn);
-                    }
-                }
-            }
+            let hy = self.second_order(&p.values, k, pos, &r);
             add_blocks(h, hv, &j, &hy, 2.0 * self.weight[k]);
         }
+    }
+
+    /// The second-order blocks $H_y$ of hinge `k` in the edge variables (see
+    /// [`Self::add_exact_hessian`]), for residual `r` at corner positions `pos`.
+    fn second_order(
+        &self,
+        p: &[f64],
+        k: usize,
+        pos: [Vector3<f64>; 4],
+        r: &Vector3<f64>,
+    ) -> [[Matrix3<f64>; 3]; 3] {
+        let id = Matrix3::<f64>::identity();
+        // d enters only through u2 = d − a, whose blocks are constant.
+        let [a, b, c, _] = pos;
+        let pv = &p[4 * k..4 * k + 4];
+        let (cs, sn, ib1, ib2) = (pv[0], pv[1], pv[2], pv[3]);
+        let (e, u1) = (b - a, c - a);
+        let le = e.norm().max(f64::MIN_POSITIVE);
+        let eh = e / le;
+        let n1 = e.cross(&u1);
+        // Second derivatives in (e, u1, u2): hy[p][q] = ∂²f/∂p∂q.
+        let mut hy = [[Matrix3::<f64>::zeros(); 3]; 3];
+        let (sr, ss) = (skew(r), skew(&r.cross(&eh)));
+        // ib2 r·(u2 × e)
+        hy[2][0] -= sr * ib2;
+        hy[0][2] += sr * ib2;
+        // −ib1 cs r·(e × u1)
+        hy[0][1] += sr * (ib1 * cs);
+        hy[1][0] -= sr * (ib1 * cs);
+        // −ib1 sn ê·m, m = n1 × r. On an edge of zero length ê is undefined; there n1 = 0,
+        // so m = 0 and these blocks vanish in the limit: they are left out where they are
+        // not finite.
+        let m = n1.cross(r);
+        let me = m.dot(&eh);
+        let mut g = [[Matrix3::<f64>::zeros(); 3]; 3];
+        g[0][0] =
+            (eh * eh.transpose() * (3.0 * me) - id * me - m * eh.transpose() - eh * m.transpose())
+                / (le * le);
+        let de = (id - eh * eh.transpose()) / le;
+        let dm_e = sr * skew(&u1);
+        let dm_u1 = -sr * skew(&e);
+        g[0][0] += de.transpose() * dm_e + dm_e.transpose() * de;
+        g[0][1] += de.transpose() * dm_u1 - ss;
+        g[1][0] += dm_u1.transpose() * de + ss;
+        if g.iter().flatten().all(|b| b.iter().all(|v| v.is_finite())) {
+            for pp in 0..2 {
+                for qq in 0..2 {
+                    hy[pp][qq] -= g[pp][qq] * (ib1 * sn);
+                }
+            }
+        }
+        hy
     }
 }
 
@@ -312,6 +328,19 @@ fn add_blocks(
     hy: &[[Matrix3<f64>; 3]; 3],
     w: f64,
 ) {
+    add_block_pairs(None, h, hv, j, hy, w);
+}
+
+/// [`add_blocks`] into `exact`, and, when given, the Gauss–Newton blocks $w J^\top J$ alone
+/// into `projected`.
+fn add_block_pairs(
+    mut projected: Option<&mut BlockHessian>,
+    exact: &mut BlockHessian,
+    hv: [u32; 4],
+    j: &[Matrix3<f64>; 4],
+    hy: &[[Matrix3<f64>; 3]; 3],
+    w: f64,
+) {
     const MAP: [[f64; 4]; 3] = [
         [-1.0, 1.0, 0.0, 0.0],
         [-1.0, 0.0, 1.0, 0.0],
@@ -319,7 +348,13 @@ fn add_blocks(
     ];
     for u in 0..4 {
         for v in u..4 {
-            let mut blk = j[u].transpose() * j[v];
+            let jtj = j[u].transpose() * j[v];
+            if let Some(ph) = projected.as_deref_mut() {
+                let m = jtj * w;
+                let b: Block = std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]));
+                ph.add(hv[u] as usize, hv[v] as usize, &b);
+            }
+            let mut blk = jtj;
             for (pp, mp) in MAP.iter().enumerate() {
                 for (qq, mq) in MAP.iter().enumerate() {
                     let s = mp[u] * mq[v];
@@ -329,7 +364,7 @@ fn add_blocks(
                 }
             }
             let b: Block = std::array::from_fn(|rr| std::array::from_fn(|cc| w * blk[(rr, cc)]));
-            h.add(hv[u] as usize, hv[v] as usize, &b);
+            exact.add(hv[u] as usize, hv[v] as usize, &b);
         }
     }
 }
@@ -415,6 +450,22 @@ impl EnergyTerm for HingeTerm {
                     h.add(hv[u] as usize, hv[v] as usize, &b);
                 }
             }
+        }
+    }
+
+    fn add_hessians(
+        &self,
+        p: &TermParameters,
+        x: &[f64],
+        projected: &mut BlockHessian,
+        exact: &mut BlockHessian,
+    ) {
+        for k in 0..self.hinges.len() {
+            let hv = self.hinges[k];
+            let pos = hv.map(|v| v3(x, v));
+            let (r, j) = self.residual_at(&p.values, k, pos);
+            let hy = self.second_order(&p.values, k, pos, &r);
+            add_block_pairs(Some(projected), exact, hv, &j, &hy, 2.0 * self.weight[k]);
         }
     }
 }

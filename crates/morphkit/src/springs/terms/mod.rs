@@ -62,6 +62,20 @@ pub trait EnergyTerm: Send + Sync {
     fn energy(&self, p: &TermParameters, x: &[f64]) -> f64;
     /// Adds the term's Hessian blocks at `x`.
     fn add_hessian(&self, p: &TermParameters, x: &[f64], kind: HessianKind, h: &mut BlockHessian);
+    /// Adds both Hessians at one `x`: the [`HessianKind::Projected`] blocks to `projected`
+    /// and the [`HessianKind::Exact`] ones to `exact`, with the same values as two calls of
+    /// [`Self::add_hessian`]. A term overrides it to share the work of the two (the Newton
+    /// loop asks for both whenever it refreshes its factor).
+    fn add_hessians(
+        &self,
+        p: &TermParameters,
+        x: &[f64],
+        projected: &mut BlockHessian,
+        exact: &mut BlockHessian,
+    ) {
+        self.add_hessian(p, x, HessianKind::Projected, projected);
+        self.add_hessian(p, x, HessianKind::Exact, exact);
+    }
 }
 
 /// Vertex-level block sparsity: for each vertex, its sorted coupled neighbours of larger index.
@@ -267,6 +281,33 @@ pub(crate) mod check {
             }
         }
         worst
+    }
+
+    /// Whether [`EnergyTerm::add_hessians`] writes exactly (bit for bit) the blocks of two
+    /// [`EnergyTerm::add_hessian`] calls.
+    pub fn fused_hessians_match(t: &dyn EnergyTerm, p: &TermParameters, x: &[f64]) -> bool {
+        let mut pairs = Vec::new();
+        t.couplings(&mut pairs);
+        let pattern = std::sync::Arc::new(BlockPattern::new(x.len() / 3, &pairs));
+        let zeros = || BlockHessian::zeros(pattern.clone());
+        let (mut fp, mut fe, mut sp, mut se) = (zeros(), zeros(), zeros(), zeros());
+        t.add_hessians(p, x, &mut fp, &mut fe);
+        t.add_hessian(p, x, HessianKind::Projected, &mut sp);
+        t.add_hessian(p, x, HessianKind::Exact, &mut se);
+        let same = |a: &BlockHessian, b: &BlockHessian| {
+            let bits = |h: &BlockHessian| -> Vec<u64> {
+                h.diag
+                    .iter()
+                    .chain(&h.off)
+                    .flatten()
+                    .flatten()
+                    .map(|v| v.to_bits())
+                    .collect()
+            };
+            bits(a) == bits(b)
+        };
+        let nonzero = fe.off.iter().flatten().flatten().any(|v| *v != 0.0);
+        nonzero && same(&fp, &sp) && same(&fe, &se)
     }
 
     /// Dense Hessian of `t` from its blocks.

@@ -68,24 +68,37 @@ fn diff(x: &[f64], i: usize, j: usize) -> [f64; 3] {
 /// trace average), so that no NaN can arise.
 #[inline]
 pub fn spring_block(d: [f64; 3], r: f64, k: f64, projected: bool) -> super::Block {
+    let (p, e) = spring_blocks(d, r, k);
+    if projected {
+        p
+    } else {
+        e
+    }
+}
+
+/// Both blocks of [`spring_block`] at once: `(projected, exact)`.
+fn spring_blocks(d: [f64; 3], r: f64, k: f64) -> (super::Block, super::Block) {
     let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
     if l <= 1e-300 {
-        return [[k, 0.0, 0.0], [0.0, k, 0.0], [0.0, 0.0, k]];
+        let b = [[k, 0.0, 0.0], [0.0, k, 0.0], [0.0, 0.0, k]];
+        return (b, b);
     }
     let u = [d[0] / l, d[1] / l, d[2] / l];
-    let mut t = 1.0 - r / l;
-    if projected {
-        t = t.max(0.0);
-    }
-    let mut b = [[0.0; 3]; 3];
-    for a in 0..3 {
-        for c in 0..3 {
-            let uu = u[a] * u[c];
-            let id = if a == c { 1.0 } else { 0.0 };
-            b[a][c] = k * (t * (id - uu) + uu);
+    let t = 1.0 - r / l;
+    let block = |t: f64| {
+        let mut b = [[0.0; 3]; 3];
+        for a in 0..3 {
+            for c in 0..3 {
+                let uu = u[a] * u[c];
+                let id = if a == c { 1.0 } else { 0.0 };
+                b[a][c] = k * (t * (id - uu) + uu);
+            }
         }
-    }
-    b
+        b
+    };
+    let exact = block(t);
+    let projected = if t >= 0.0 { exact } else { block(0.0) };
+    (projected, exact)
 }
 
 impl EnergyTerm for SpringTerm {
@@ -174,11 +187,33 @@ impl EnergyTerm for SpringTerm {
             h.add(i, j, &neg);
         }
     }
+
+    fn add_hessians(
+        &self,
+        p: &TermParameters,
+        x: &[f64],
+        projected: &mut BlockHessian,
+        exact: &mut BlockHessian,
+    ) {
+        let m = self.set.len();
+        let (rest, k) = p.values.split_at(m);
+        for (q, s) in self.set.springs().iter().enumerate() {
+            let (i, j) = (s.i as usize, s.j as usize);
+            let d = diff(x, i, j);
+            let (bp, be) = spring_blocks(d, rest[q], k[q]);
+            for (h, b) in [(&mut *projected, bp), (&mut *exact, be)] {
+                h.add(i, i, &b);
+                h.add(j, j, &b);
+                let neg = b.map(|row| row.map(|v| -v));
+                h.add(i, j, &neg);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::check::{dense_hessian, gradient_error, hessian_error};
+    use super::super::check::{dense_hessian, fused_hessians_match, gradient_error, hessian_error};
     use super::*;
     use crate::mesh::{generate, ShapeSet, Topology};
     use crate::springs::SpringOptions;
@@ -222,6 +257,8 @@ mod tests {
             assert!(err < 1e-7 * gmax.max(1.0), "gradient FD error {err}");
         }
         let (term, p, x) = setup(StiffnessRule::InverseRestLength);
+        // Both Hessians in one pass equal two separate passes, bit for bit.
+        assert!(fused_hessians_match(&term, &p, &x));
         let hm = dense_hessian(&term, &p, &x, HessianKind::Exact);
         let worst = hessian_error(&term, &p, &x, &hm);
         assert!(worst < 1e-6, "Hessian FD error {worst}");
