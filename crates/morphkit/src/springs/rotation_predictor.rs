@@ -15,10 +15,20 @@
 //! reproduces the shape exactly (up to round-off), so endpoints stay exact; in between, a jaw
 //! or a leg that turns by θ is predicted turned by about αθ instead of cut short along the
 //! chord as by the linear blend.
+//!
+//! Vertices that no triangle uses (the interior and anchor vertices of a volumetric blend,
+//! issue 11) have no gradient. The Poisson solve runs on the triangulated surface alone, and
+//! each such vertex $y$ is carried by the weighted Kabsch motion $K$ of its nearest surface
+//! vertices from the base to the predicted surface (the reverse solve's guess,
+//! [`Neighbourhoods`]), plus the blend of what that guess misses in each shape:
+//! $y(c) = K_{P(c)}(y^0) + \sum_s c_s \big(y^s - K_{x^s}(y^0)\big)$. At one-hot weights this
+//! is $y^s$ (the reverse-solved position), so endpoints stay exact; a bent interior follows the
+//! bend instead of the linear blend's chord.
 
 use super::constraints::Components;
+use super::interior::reverse::Neighbourhoods;
 use crate::geom::{kabsch, polar_decomposition};
-use crate::mesh::{Point, ShapeSet};
+use crate::mesh::{Point, ShapeSet, TriMesh};
 use crate::transfer::{GradientOperator, SolverOptions, TransferSolver};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
@@ -29,18 +39,57 @@ pub(crate) struct RotationPredictor {
     logs: Vec<Vec<Vector3<f64>>>,
     stretches: Vec<Vec<Matrix3<f64>>>,
     members: Vec<Vec<u32>>,
+    /// The triangulated vertices, in the order of the Poisson solve's unknowns.
+    surface: Vec<u32>,
+    /// The other vertices, carried by their surface neighbourhoods (module doc).
+    carried: Option<Carried>,
+}
+
+/// Vertices without triangles and how they follow the surface.
+struct Carried {
+    vertices: Vec<u32>,
+    near: Neighbourhoods,
+    /// Base positions: the surface (solve order), then the carried vertices.
+    surface_base: Vec<Point>,
+    carried_base: Vec<Point>,
+    /// Per shape: each carried vertex's offset from its guess, $y^s - K_{x^s}(y^0)$.
+    residuals: Vec<Vec<Point>>,
 }
 
 impl RotationPredictor {
-    /// Gradients, polar factors and the factorization; `None` when the base cannot carry a
-    /// Poisson solve (isolated vertices, say), and the linear blend is used instead.
+    /// Gradients, polar factors and the factorization of the triangulated vertices, and the
+    /// neighbourhoods of the others (module doc); `None` when the base surface cannot carry a
+    /// Poisson solve (no triangles, say), and the linear blend is used instead.
     pub fn new(shapes: &ShapeSet, components: &Components) -> Option<Self> {
-        let base = shapes.mesh(0);
+        let n = shapes.num_vertices();
+        let mut local = vec![u32::MAX; n];
+        let mut surface = Vec::new();
+        for t in shapes.triangles() {
+            for &v in t {
+                if local[v as usize] == u32::MAX {
+                    local[v as usize] = 0;
+                }
+            }
+        }
+        for v in 0..n {
+            if local[v] != u32::MAX {
+                local[v] = surface.len() as u32;
+                surface.push(v as u32);
+            }
+        }
+        let restrict =
+            |p: &[Point]| -> Vec<Point> { surface.iter().map(|&v| p[v as usize]).collect() };
+        let tris: Vec<[u32; 3]> = shapes
+            .triangles()
+            .iter()
+            .map(|t| t.map(|v| local[v as usize]))
+            .collect();
+        let base = TriMesh::new(restrict(shapes.positions(0)), tris);
         let solver = TransferSolver::new(&base, &SolverOptions::default()).ok()?;
         let op = GradientOperator::new(&base);
         let (mut logs, mut stretches) = (Vec::new(), Vec::new());
         for s in 1..shapes.len() {
-            let grads = op.gradients(shapes.positions(s)).ok()?;
+            let grads = op.gradients(&restrict(shapes.positions(s))).ok()?;
             let (mut l, mut st) = (
                 Vec::with_capacity(grads.len()),
                 Vec::with_capacity(grads.len()),
@@ -58,11 +107,41 @@ impl RotationPredictor {
         for (v, &c) in components.label.iter().enumerate() {
             members[c as usize].push(v as u32);
         }
+        let vertices: Vec<u32> = (0..n as u32)
+            .filter(|&v| local[v as usize] == u32::MAX)
+            .collect();
+        let carried = (!vertices.is_empty()).then(|| {
+            let pick =
+                |p: &[Point]| -> Vec<Point> { vertices.iter().map(|&v| p[v as usize]).collect() };
+            let surface_base = base.positions.clone();
+            let carried_base = pick(shapes.positions(0));
+            let near = Neighbourhoods::new(&surface_base, &carried_base);
+            let residuals = (0..shapes.len())
+                .map(|s| {
+                    let guess =
+                        near.guess(&surface_base, &restrict(shapes.positions(s)), &carried_base);
+                    let own = pick(shapes.positions(s));
+                    own.iter()
+                        .zip(&guess)
+                        .map(|(y, g)| [y[0] - g[0], y[1] - g[1], y[2] - g[2]])
+                        .collect()
+                })
+                .collect();
+            Carried {
+                vertices,
+                near,
+                surface_base,
+                carried_base,
+                residuals,
+            }
+        });
         Some(Self {
             solver,
             logs,
             stretches,
             members,
+            surface,
+            carried,
         })
     }
 
@@ -83,7 +162,24 @@ impl RotationPredictor {
             let r = UnitQuaternion::from_scaled_axis(w).to_rotation_matrix();
             grads.push(r.matrix() * st);
         }
-        let mut p = self.solver.solve(&grads).ok()?;
+        let solved = self.solver.solve(&grads).ok()?;
+        let mut p = lin.to_vec();
+        for (&v, &x) in self.surface.iter().zip(&solved) {
+            p[v as usize] = x;
+        }
+        if let Some(k) = &self.carried {
+            let guess = k.near.guess(&k.surface_base, &solved, &k.carried_base);
+            for (i, (&v, g)) in k.vertices.iter().zip(guess).enumerate() {
+                let mut y = g;
+                for (s, &w) in c.iter().enumerate() {
+                    if w != 0.0 {
+                        let r = k.residuals[s][i];
+                        y = [y[0] + w * r[0], y[1] + w * r[1], y[2] + w * r[2]];
+                    }
+                }
+                p[v as usize] = y;
+            }
+        }
         for comp in &self.members {
             let anchor: Vec<u32> = comp
                 .iter()
