@@ -198,7 +198,13 @@ impl AnimationTransfer {
             source,
         })?;
         correspondence.check(source_reference, target)?;
-        let solver = TransferSolver::new(target, &opts.solver)?;
+        let local_frames = (opts.frame == GradientFrame::LocalStretch)
+            .then(|| (unit_normals(source_reference), unit_normals(target)));
+        let confidence = match &local_frames {
+            Some((ns, nt)) => correspondence.local_confidence(ns, nt, opts.combine),
+            None => Vec::new(),
+        };
+        let solver = TransferSolver::with_confidence(target, &opts.solver, &confidence)?;
         let placement = Placement::new(source_reference, target, correspondence, opts.translation);
         Ok(Self {
             gradients: GradientOperator::new(source_reference),
@@ -208,8 +214,7 @@ impl AnimationTransfer {
             target_flips: FlipCheck::new(target),
             placement,
             combine: opts.combine,
-            local_frames: (opts.frame == GradientFrame::LocalStretch)
-                .then(|| (unit_normals(source_reference), unit_normals(target))),
+            local_frames,
         })
     }
 
