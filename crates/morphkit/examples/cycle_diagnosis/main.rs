@@ -166,8 +166,10 @@ type WarpRotations<'a> = Pairwise<'a, Matrix3<f64>>;
 
 /// Combines matched gradients by their polar factors: the rotations' chordal mean
 /// (projected sum) times the weighted mean of the stretches, each turned from its source
-/// triangle's plane into the target triangle's when `normals` are given (the library's
-/// `GradientFrame::LocalStretch`, re-implemented here to vary it).
+/// triangle's plane into the target triangle's when `normals` are given (the combine of the
+/// library's `GradientFrame::LocalStretch`, re-implemented here to vary it; `nw=1` weights
+/// matches by max(0, n_s · n_t), as the library did before it took cos⁴(θ/2); the solves are
+/// not confidence-weighted here).
 fn map_polar_aligned(
     c: &Correspondence,
     g: &[Matrix3<f64>],

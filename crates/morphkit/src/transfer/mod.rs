@@ -29,8 +29,8 @@ pub use animation::{
     TranslationMode,
 };
 pub use correspondence::{
-    correspond, Correspondence, CorrespondenceOptions, CorrespondenceResult, GradientCombine,
-    MarkerResidual, RefineOptions, RefineStep,
+    correspond, normal_agreement, Correspondence, CorrespondenceOptions, CorrespondenceResult,
+    GradientCombine, MarkerResidual, RefineOptions, RefineStep, CONFIDENCE_FLOOR,
 };
 pub use error::{CorrespondenceError, MarkerError, Side, TransferError};
 pub use gradients::{deformation_gradients, flipped_triangles, GradientOperator};

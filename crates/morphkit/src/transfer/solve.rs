@@ -68,6 +68,22 @@ pub struct TransferSolver {
 impl TransferSolver {
     /// Validates `target`, builds $A^\top A$, eliminates the constraint vertices and factors.
     pub fn new(target: &TriMesh, opts: &SolverOptions) -> Result<Self, TransferError> {
+        Self::with_confidence(target, opts, &[])
+    }
+
+    /// [`TransferSolver::new`] with every triangle's weight $w_j$ also multiplied by
+    /// `confidence[j]` (positive, one per triangle; empty: all 1), the weighted least squares
+    /// of [`Correspondence::local_confidence`](super::Correspondence::local_confidence).
+    pub(crate) fn with_confidence(
+        target: &TriMesh,
+        opts: &SolverOptions,
+        confidence: &[f64],
+    ) -> Result<Self, TransferError> {
+        debug_assert!(
+            confidence.is_empty()
+                || (confidence.len() == target.num_triangles()
+                    && confidence.iter().all(|c| c.is_finite() && *c > 0.0))
+        );
         let report = validate(target).map_err(|source| TransferError::Mesh {
             side: Side::Target,
             source,
@@ -91,10 +107,12 @@ impl TransferSolver {
                     let r1: Vector3<f64> = inv.row(0).transpose();
                     let r2: Vector3<f64> = inv.row(1).transpose();
                     coeff.push([-(r1 + r2), r1, r2]);
-                    weight.push(match opts.weighting {
-                        TriangleWeighting::Uniform => 1.0,
-                        TriangleWeighting::Area => target.triangle_area(t) / mean_area,
-                    });
+                    weight.push(
+                        match opts.weighting {
+                            TriangleWeighting::Uniform => 1.0,
+                            TriangleWeighting::Area => target.triangle_area(t) / mean_area,
+                        } * confidence.get(t).copied().unwrap_or(1.0),
+                    );
                 }
                 None => {
                     skipped.push(t);
@@ -304,6 +322,35 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_triangle_of_low_confidence_gives_way_to_its_neighbours() {
+        // Every triangle wants the identity but one, which wants 3 I: with full confidence
+        // it drags its neighbours; with a low one they keep the identity.
+        let m = grid(4, 4, 1.0);
+        let mut g = vec![Matrix3::identity(); m.num_triangles()];
+        g[9] = Matrix3::identity() * 3.0;
+        let worst_elsewhere = |confidence: &[f64]| {
+            let s =
+                TransferSolver::with_confidence(&m, &SolverOptions::default(), confidence).unwrap();
+            let x = s.solve(&g).unwrap();
+            let got = deformation_gradients(&m, &x).unwrap();
+            (0..m.num_triangles())
+                .filter(|&t| t != 9)
+                .map(|t| {
+                    (got[t] - Matrix3::identity())
+                        .fixed_view::<3, 2>(0, 0)
+                        .norm()
+                })
+                .fold(0.0, f64::max)
+        };
+        let mut low = vec![1.0; m.num_triangles()];
+        low[9] = 1e-3;
+        let (full, weak) = (worst_elsewhere(&[]), worst_elsewhere(&low));
+        assert!(full > 0.3, "{full}");
+        assert!(weak < 0.01, "{weak}");
+        assert_eq!(worst_elsewhere(&vec![1.0; m.num_triangles()]), full);
     }
 
     #[test]

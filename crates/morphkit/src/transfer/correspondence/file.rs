@@ -153,8 +153,8 @@ impl Correspondence {
     /// `source_polar` holds the polar factors $(R_i, S_i)$ of every source gradient
     /// ($G_i = R_i S_i$), `source_normals` / `target_normals` the unit normals of the two
     /// reference meshes (zero for a degenerate triangle). With $w_k$ the weights of `combine`
-    /// times the agreement $a_k = \max(0, n_k \cdot n_j)$ of the reference normals (the
-    /// weights of `combine` alone when no match agrees), the result is
+    /// times the agreement $a_k$ of the reference normals ([`normal_agreement`]; the weights
+    /// of `combine` alone when every $a_k$ is 0), the result is
     /// $M_j = \operatorname{proj}_{SO(3)}\big(\sum_k w_k R_k\big)\,
     /// \frac{\sum_k w_k Q_{kj} S_k Q_{kj}^\top}{\sum_k w_k}$, $Q_{kj}$ the smallest rotation
     /// taking source normal $k$ onto target normal $j$.
@@ -170,12 +170,12 @@ impl Correspondence {
                 let nt = target_normals[t];
                 let mut any = false;
                 self.for_each_weight(t, combine, |i, _| {
-                    any |= source_normals[i].dot(&nt) > AGREEMENT_FLOOR;
+                    any |= normal_agreement(source_normals[i].dot(&nt)) > 0.0;
                 });
                 let (mut r, mut s, mut wsum) = (Matrix3::zeros(), Matrix3::zeros(), 0.0);
                 self.for_each_weight(t, combine, |i, w| {
                     let c = source_normals[i].dot(&nt);
-                    let w = if any { w * c.max(0.0) } else { w };
+                    let w = if any { w * normal_agreement(c) } else { w };
                     if w == 0.0 {
                         return;
                     }
@@ -186,6 +186,35 @@ impl Correspondence {
                     wsum += w;
                 });
                 polar(&r).0 * (s / wsum)
+            })
+            .collect()
+    }
+
+    /// The confidence $c_j = \sum_k \hat w_k a_k$ of every target triangle's
+    /// [`Correspondence::map_gradients_local`] gradient: $\hat w_k$ the weights of `combine`
+    /// normalised to sum 1, $a_k$ the [`normal_agreement`] of the reference normals; at
+    /// least [`CONFIDENCE_FLOOR`]. Sumner & Popović (2004, Sec. 4) minimise one term
+    /// $\|T_j - M_k\|_F^2$ per matched pair; weighting each pair by $\hat w_k a_k$, the
+    /// terms of triangle $j$ sum to $c_j \|T_j - M_j\|_F^2$ plus a constant, $M_j$ the
+    /// weighted mean. So $c_j$ is triangle $j$'s weight in the solve
+    /// ([`GradientFrame::LocalStretch`](crate::transfer::GradientFrame::LocalStretch)): a
+    /// triangle whose matches face away in the references (its wanted gradient carried over
+    /// through a large turn, or from the wrong side) counts for little, and its neighbours
+    /// shape it. 1 for every triangle of a mesh onto itself.
+    pub fn local_confidence(
+        &self,
+        source_normals: &[Vector3<f64>],
+        target_normals: &[Vector3<f64>],
+        combine: GradientCombine,
+    ) -> Vec<f64> {
+        (0..self.target_triangles)
+            .map(|t| {
+                let (mut a, mut wsum) = (0.0, 0.0);
+                self.for_each_weight(t, combine, |i, w| {
+                    a += w * normal_agreement(source_normals[i].dot(&target_normals[t]));
+                    wsum += w;
+                });
+                (a / wsum).max(CONFIDENCE_FLOOR)
             })
             .collect()
     }
@@ -369,9 +398,22 @@ impl Correspondence {
     }
 }
 
-/// Reference normals agree ([`Correspondence::map_gradients_local`]) when their cosine is
-/// above this.
-const AGREEMENT_FLOOR: f64 = 1e-6;
+/// The agreement of two unit reference normals with cosine `c` (angle $\theta$):
+/// $a = \big(\tfrac{1 + c}{2}\big)^2 = \cos^4(\theta / 2)$: 1 when they are the same, 1/4 at
+/// 90°, 0 when opposite (where the smallest rotation between them is undefined). Each match of
+/// [`Correspondence::map_gradients_local`] is weighted by it, and
+/// [`Correspondence::local_confidence`] sums it. Measured on horse ↔ camel and cat ↔ dog
+/// (refined, area-weighted; `tests/transfer_quality_real_data.rs`): $\cos^2(\theta/2)$ lowers
+/// the cycle error less (−29.2 % / −23.5 % against −32.6 % / −26.0 %), $\cos^8(\theta/2)$
+/// folds more (123 / 101 sharp folds against 27 / 98; the baseline has 77 / 99).
+pub fn normal_agreement(c: f64) -> f64 {
+    let h = 0.5 * (1.0 + c.clamp(-1.0, 1.0));
+    h * h
+}
+
+/// The least confidence of a target triangle ([`Correspondence::local_confidence`]), so that
+/// no triangle drops out of the solve (a vertex with only such triangles would be free).
+pub const CONFIDENCE_FLOOR: f64 = 1e-3;
 
 /// Polar decomposition $M = R S$: $R$ the rotation nearest to $M$ (det +1, from the SVD),
 /// $S = R^\top M$ (symmetric).

@@ -25,7 +25,9 @@ mod file;
 mod matching;
 pub mod refine;
 
-pub use file::{polar, rotation_between, Correspondence, FORMAT, VERSION};
+pub use file::{
+    normal_agreement, polar, rotation_between, Correspondence, CONFIDENCE_FLOOR, FORMAT, VERSION,
+};
 pub use refine::{RefineOptions, RefineStep};
 
 use super::error::{CorrespondenceError, Side};

@@ -350,3 +350,33 @@ fn the_local_stretch_map_of_an_identity_correspondence_is_the_identity() {
         assert!((a - b).norm() < 1e-12, "{a} vs {b}");
     }
 }
+
+#[test]
+fn local_confidence_follows_the_reference_normals_agreement() {
+    assert_eq!(normal_agreement(1.0), 1.0);
+    assert!((normal_agreement(0.0) - 0.25).abs() < 1e-15);
+    assert_eq!(normal_agreement(-1.0), 0.0);
+    let m = sphere(8, 6, 1.0);
+    let c = Correspondence::identity(&m);
+    let n: Vec<nalgebra::Vector3<f64>> = (0..m.num_triangles())
+        .map(|t| nalgebra::Vector3::from(m.triangle_normal(t)).normalize())
+        .collect();
+    let same = c.local_confidence(&n, &n, GradientCombine::default());
+    assert!(same.iter().all(|&x| (x - 1.0).abs() < 1e-12), "{same:?}");
+    // Every target normal turned by 90° about an axis in its plane: 1/4; reversed: the floor.
+    let turned: Vec<_> = n
+        .iter()
+        .map(|v| {
+            let a = v.cross(&nalgebra::Vector3::new(0.3, -0.5, 0.8)).normalize();
+            a.cross(v)
+        })
+        .collect();
+    let quarter = c.local_confidence(&n, &turned, GradientCombine::default());
+    assert!(
+        quarter.iter().all(|&x| (x - 0.25).abs() < 1e-9),
+        "{quarter:?}"
+    );
+    let back: Vec<_> = n.iter().map(|v| -v).collect();
+    let away = c.local_confidence(&n, &back, GradientCombine::default());
+    assert!(away.iter().all(|&x| x == CONFIDENCE_FLOOR), "{away:?}");
+}
