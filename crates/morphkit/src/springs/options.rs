@@ -65,10 +65,7 @@ pub struct BlendOptions {
     /// the last Newton steps of a frame reuse the factor of the first: per step over 12-step
     /// sequences (`morphkit bench --suite springs`, one thread), tubes 2.2k/18.6k 73 → 37 ms and
     /// 917 → 563 ms, horse ↔ horse-05 1039 → 759 ms, ICT jawOpen 5055 → 4443 ms, armadillo
-    /// 1403 → 1313 ms. A step stopped by the trust-region boundary in its first CG iteration
-    /// also keeps the factor (the early steps of a frame far from its equilibrium: 38 → 33
-    /// factorizations over the horse's 12 frames). A count, never a time, so results do not
-    /// depend on the machine's load.
+    /// 1403 → 1313 ms. A count, never a time, so results do not depend on the machine's load.
     pub keep_factor_cg: usize,
     /// Largest predicted memory of one solver, in bytes; a larger problem is refused before
     /// anything big is allocated, with the estimate in the error. Default 8 GiB.
