@@ -115,7 +115,8 @@ def solver_for(obj, scene=None):
     else:
         blend = morphkit.PhysicalBlend(base, targets, F, interior=interior, anchor=anchor)
     # The predictor is taken now: it must not touch the blend while a job solves with it.
-    # With an interior or an anchor there is none, and live mode solves synchronously.
+    # With an interior or an anchor the add-on takes none, and live mode solves synchronously
+    # (the module's predictor would preview the volumetric start; the sync solve is exact).
     predictor = blend.predictor() if interior is None and anchor is None else None
     _solvers[obj.name] = (sig, blend, F, predictor)
     return blend, F

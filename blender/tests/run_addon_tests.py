@@ -152,7 +152,7 @@ cyl.morphkit_live_preview = True
 cyl.morphkit_live = False
 
 # Internal springs (the cylinder is closed): the Physical update equals the module's blend with
-# a lattice interior; live mode then solves synchronously (no predictor with an interior).
+# a lattice interior; live mode then solves synchronously (the add-on takes no predictor then).
 cyl.morphkit_interior = "lattice"
 key.value = 0.5
 check(bpy.ops.morphkit.physical_update() == {"FINISHED"}, "physical_update with an interior failed")

@@ -7,8 +7,8 @@ use crate::errors::{new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
 use morphkit::mesh::ShapeSet;
 use morphkit::springs::{
-    AnchorOptions, AnchorPlacement, BlendOptions, BlendPredictor, FixedVertices, FrameStats,
-    InteriorMode, InteriorOptions, PhysicalBlend, PointTarget, VolumetricBlend, Weights,
+    AnchorOptions, AnchorPlacement, BlendOptions, FixedVertices, FrameStats, InteriorMode,
+    InteriorOptions, PhysicalBlend, PointTarget, SurfacePredictor, VolumetricBlend, Weights,
 };
 use numpy::{PyArray2, PyArray3};
 use pyo3::prelude::*;
@@ -353,15 +353,14 @@ impl PyPhysicalBlend {
     }
 
     /// A :class:`Predictor` of this blend that can be used while :meth:`solve` runs on
-    /// another thread. Not available with `interior` or `anchor`.
+    /// another thread. With `interior` or `anchor` it predicts the volumetric solve's start
+    /// (the interior carried along), on the input surface in world coordinates.
     fn predictor(&self) -> PyResult<PyPredictor> {
-        match &self.inner {
-            Solver::Surface(b) => Ok(PyPredictor::new(b.predictor(), self.targets)),
-            Solver::Volume(_) => Err(new_err(
-                Kind::Blend,
-                "predictor: not available with interior or anchor",
-            )),
-        }
+        let p = match &self.inner {
+            Solver::Surface(b) => SurfacePredictor::from(b.predictor()),
+            Solver::Volume(v) => v.predictor(),
+        };
+        Ok(PyPredictor::new(p, self.targets))
     }
 
     /// Statistics of the last solve as a dict (Newton iterations, factorizations, gradient
@@ -410,12 +409,12 @@ impl PyPhysicalBlend {
 /// >>> X = preview.predict([0.5])
 #[pyclass(name = "Predictor", module = "morphkit", frozen)]
 pub struct PyPredictor {
-    inner: BlendPredictor,
+    inner: SurfacePredictor,
     targets: usize,
 }
 
 impl PyPredictor {
-    pub fn new(inner: BlendPredictor, targets: usize) -> Self {
+    pub fn new(inner: SurfacePredictor, targets: usize) -> Self {
         Self { inner, targets }
     }
 }

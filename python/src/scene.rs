@@ -263,17 +263,12 @@ impl PySceneBlend {
     }
 
     /// A :class:`Predictor` of the blend without obstacles and pulls (a preview that may
-    /// penetrate the obstacles), usable while :meth:`solve` runs on another thread. Not
-    /// available with `interior` or `anchor`.
+    /// penetrate the obstacles), usable while :meth:`solve` runs on another thread. With
+    /// `interior` or `anchor` it predicts the volumetric solve's start, on the input surface
+    /// in world coordinates.
     fn predictor(&self) -> PyResult<crate::blend::PyPredictor> {
-        if self.inner.interior_report().is_some() {
-            return Err(new_err(
-                Kind::Blend,
-                "predictor: not available with interior or anchor",
-            ));
-        }
         Ok(crate::blend::PyPredictor::new(
-            self.inner.predictor(),
+            self.inner.surface_predictor(),
             self.targets,
         ))
     }

@@ -185,13 +185,22 @@ def test_predictor_previews_while_the_blend_solves(rig):
         preview.predict([0.5, 0.5])
 
 
-def test_no_predictor_with_an_interior():
+def test_predictor_with_an_interior_previews_the_volumetric_start():
     from conftest import capped_tube
 
     V, F = capped_tube()
-    b = morphkit.PhysicalBlend(V, [bend(V, 1.5)], F, interior="lattice")
-    with pytest.raises(morphkit.BlendError, match="interior"):
-        b.predictor()
+    B = bend(V, 1.5)
+    for anchor in (None, "auto"):
+        b = morphkit.PhysicalBlend(V, [B], F, interior="lattice", anchor=anchor)
+        preview = b.predictor()
+        assert np.abs(preview.predict(0.0) - V).max() < 1e-9
+        assert np.abs(preview.predict(1.0) - B).max() < 1e-9
+        p = b.predict(0.5)
+        assert p.shape == V.shape
+        assert np.array_equal(p, preview.predict(0.5))
+        x = b.solve(0.5)
+        lin = 0.5 * (V + B)
+        assert np.abs(p - x).max() < 0.5 * np.abs(lin - x).max()
 
 
 def test_tetgen_interior():

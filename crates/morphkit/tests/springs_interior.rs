@@ -524,3 +524,32 @@ fn the_predictor_carries_the_interior_along_the_bend() {
     // Both reach the same equilibrium.
     assert!(max_dist(&x, &y) <= 1e-5 * bbox_diagonal(s.positions(0)));
 }
+
+/// `VolumetricBlend::predict` previews the start of the volumetric solve on the input
+/// surface, in world coordinates: exact at the endpoints, nearer the equilibrium than the
+/// linear blend at α = ½, with and without the anchor's frame.
+#[test]
+fn the_volumetric_predictor_previews_the_surface_in_the_world() {
+    let s = bent_bar(150.0);
+    let d = bbox_diagonal(s.positions(0));
+    for anchor in [AnchorOptions::default(), auto_anchor()] {
+        let v = volumetric(&s, &lattice(2.0), &anchor);
+        let preview = v.predictor();
+        for (alpha, shape) in [(0.0, 0), (1.0, 1)] {
+            let p = preview.predict(&Weights::Alpha(alpha)).unwrap();
+            assert_eq!(p.len(), s.num_vertices());
+            assert!(max_dist(&p, s.positions(shape)) <= 1e-9 * d);
+        }
+        let w = Weights::Alpha(0.5);
+        let p = v.predict(&w).unwrap();
+        let mut v = v;
+        let x = v.solve(&w).unwrap().positions;
+        let lin = linear_blend(&s, &w).unwrap();
+        assert!(
+            max_dist(&p, &x) < 0.5 * max_dist(&lin, &x),
+            "{} vs {}",
+            max_dist(&p, &x),
+            max_dist(&lin, &x)
+        );
+    }
+}

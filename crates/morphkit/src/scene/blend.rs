@@ -7,7 +7,7 @@ use super::pulls::{Pull, PullKind};
 use super::SceneError;
 use crate::mesh::{bbox_diagonal, Point, ShapeSet};
 use crate::springs::interior::anchor::targets_in_frame;
-use crate::springs::interior::{AnchorMotion, InteriorReport};
+use crate::springs::interior::{AnchorMotion, InteriorReport, SurfacePredictor};
 use crate::springs::{
     AnchorOptions, AnchorPlacement, BlendOptions, BlendPredictor, FrameSolver, FrameStats,
     InteriorMode, InteriorOptions, PhysicalBlend, VolumetricBlend, Weights,
@@ -222,6 +222,17 @@ impl SceneBlend {
     /// an interior or an anchor it is that of the extended system, in the anchor's frame.
     pub fn predictor(&self) -> BlendPredictor {
         self.solver.predictor()
+    }
+
+    /// The predictor on the input surface in world coordinates (no obstacles, no pulls; with
+    /// an interior or an anchor, the volumetric blend's, mapped out of the anchor's frame).
+    pub fn surface_predictor(&self) -> SurfacePredictor {
+        SurfacePredictor::new(
+            self.solver.predictor(),
+            self.motion.clone(),
+            self.surface_vertices,
+            self.solver.shapes().len(),
+        )
     }
 
     /// The underlying physical blend.

@@ -44,6 +44,14 @@ impl std::fmt::Debug for BlendPredictor {
 }
 
 impl BlendPredictor {
+    /// Vertices of a prediction.
+    pub fn num_vertices(&self) -> usize {
+        self.rig.shapes.num_vertices()
+    }
+    /// Shapes of the blend (base and targets).
+    pub fn num_shapes(&self) -> usize {
+        self.rig.shapes.len()
+    }
     /// The shape every solve for `weights` starts from, in world coordinates (`#V`): the
     /// rotation-aware interpolation of the shapes (the linear blend with
     /// [`Predictor::Linear`]), with fixed and kinematic vertices at their linear blend. It

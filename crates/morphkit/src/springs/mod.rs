@@ -71,7 +71,8 @@ pub mod weights;
 pub use blender::{blend, BlendPredictor, FrameSolver, PhysicalBlend};
 pub use constraints::{stretched_vertices, Components, Constraints, FixedVertices, Gauge};
 pub use interior::{
-    AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions, VolumetricBlend,
+    AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions, SurfacePredictor,
+    VolumetricBlend,
 };
 pub use metrics::{blend_metrics, fold_metrics, linear_blend, BlendMetrics, FoldMetrics};
 pub use options::{

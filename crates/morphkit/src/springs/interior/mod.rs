@@ -75,7 +75,7 @@ pub use anchor::{Anchor, AnchorMotion};
 pub use inversion::{count_inversions, Inversions};
 pub use lattice::{Interior, SkippedComponent};
 pub use options::{AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions};
-pub use volumetric::{InteriorReport, VolumeResult, VolumetricBlend};
+pub use volumetric::{InteriorReport, SurfacePredictor, VolumeResult, VolumetricBlend};
 
 use super::BlendError;
 

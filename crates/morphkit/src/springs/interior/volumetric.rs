@@ -12,8 +12,8 @@ use crate::geom::RigidTransform;
 use crate::mesh::{Point, ShapeSet, TriMesh};
 use crate::springs::terms::{EnergyTerm, SpringTerm};
 use crate::springs::{
-    BlendError, BlendOptions, FixedVertices, FrameStats, PhysicalBlend, Spring, SpringKind,
-    SpringSet, Weights,
+    BlendError, BlendOptions, BlendPredictor, FixedVertices, FrameStats, PhysicalBlend, Spring,
+    SpringKind, SpringSet, Weights,
 };
 use std::time::Instant;
 
@@ -59,6 +59,65 @@ pub struct VolumeResult {
     pub inversions: Inversions,
     /// The anchor's blended motion $T(c)$, when there is an anchor.
     pub anchor_motion: Option<RigidTransform>,
+}
+
+/// The predictor of a blend on its input surface, in world coordinates: that of a
+/// [`PhysicalBlend`] ([`BlendPredictor`]), or of a [`VolumetricBlend`] (or a scene built on
+/// one), whose prediction of the extended system is mapped out of the anchor's frame and cut
+/// to the surface. The interior is predicted too (carried with its surface neighbourhood), so
+/// this previews the volumetric blend's start, not the surface blend's. Cheap to clone,
+/// `Send + Sync`, usable while the blend solves on another thread.
+#[derive(Clone)]
+pub struct SurfacePredictor {
+    inner: BlendPredictor,
+    motion: Option<AnchorMotion>,
+    surface: usize,
+    shapes: usize,
+}
+
+impl std::fmt::Debug for SurfacePredictor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SurfacePredictor")
+            .field("surface", &self.surface)
+            .finish()
+    }
+}
+
+impl SurfacePredictor {
+    /// The predictor of `inner` (a blend of `shapes` shapes whose first `surface` vertices
+    /// are the input's), mapped to the world by the anchor's `motion` when there is one.
+    pub(crate) fn new(
+        inner: BlendPredictor,
+        motion: Option<AnchorMotion>,
+        surface: usize,
+        shapes: usize,
+    ) -> Self {
+        Self {
+            inner,
+            motion,
+            surface,
+            shapes,
+        }
+    }
+
+    /// The predicted surface for `weights` ([`BlendPredictor::predict`]): exact at one-hot
+    /// weights, one prefactored solve.
+    pub fn predict(&self, weights: &Weights) -> Result<Vec<Point>, BlendError> {
+        let mut p = self.inner.predict(weights)?;
+        if let Some(m) = &self.motion {
+            let t = m.at(&weights.coefficients(self.shapes)?);
+            p.iter_mut().for_each(|x| *x = t.apply(*x));
+        }
+        p.truncate(self.surface);
+        Ok(p)
+    }
+}
+
+impl From<BlendPredictor> for SurfacePredictor {
+    fn from(inner: BlendPredictor) -> Self {
+        let (surface, shapes) = (inner.num_vertices(), inner.num_shapes());
+        Self::new(inner, None, surface, shapes)
+    }
 }
 
 /// Physical blend with internal springs and an anchor: build once, solve many.
@@ -241,6 +300,22 @@ impl VolumetricBlend {
     /// The interior tetrahedra (extended ids), positively oriented in the base.
     pub fn tetrahedra(&self) -> &[[u32; 4]] {
         &self.tets
+    }
+
+    /// The shape every solve for `weights` starts from, on the input surface in world
+    /// coordinates (a preview, see [`SurfacePredictor`]).
+    pub fn predict(&self, weights: &Weights) -> Result<Vec<Point>, BlendError> {
+        self.predictor().predict(weights)
+    }
+
+    /// A handle on [`predict`](Self::predict) that does not borrow the blend.
+    pub fn predictor(&self) -> SurfacePredictor {
+        SurfacePredictor::new(
+            self.blend.predictor(),
+            self.motion.clone(),
+            self.surface.num_vertices(),
+            self.surface.len(),
+        )
     }
 
     /// The canonical equilibrium of the extended system for `weights`, surface returned.
