@@ -180,19 +180,9 @@ impl SceneBlend {
         threads: usize,
     ) -> Vec<Result<SceneFrame, SceneError>> {
         let (ctx, solver) = self.split();
-        solver
-            .map_frames(frames, threads, |s, (f, w)| ctx.solve(s, *f, w))
-            .into_iter()
-            .enumerate()
-            .map(|(k, r)| {
-                r.unwrap_or_else(|| {
-                    Err(
-                        crate::springs::BlendError::InvalidOption(format!("frame {k} was lost"))
-                            .into(),
-                    )
-                })
-            })
-            .collect()
+        crate::springs::report_lost(
+            solver.map_frames(frames, threads, |s, (f, w)| ctx.solve(s, *f, w)),
+        )
     }
 
     /// The read-only part of the scene beside the solver, borrowed apart.
@@ -231,7 +221,6 @@ impl SceneBlend {
             self.solver.predictor(),
             self.motion.clone(),
             self.surface_vertices,
-            self.solver.shapes().len(),
         )
     }
 

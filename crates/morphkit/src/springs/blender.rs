@@ -363,13 +363,7 @@ impl PhysicalBlend {
         weights: &[Weights],
         threads: usize,
     ) -> Vec<Result<BlendResult, BlendError>> {
-        self.map_frames(weights, threads, |s, w| s.solve_with(w, &[], None))
-            .into_iter()
-            .enumerate()
-            .map(|(k, r)| {
-                r.unwrap_or_else(|| Err(BlendError::InvalidOption(format!("frame {k} was lost"))))
-            })
-            .collect()
+        report_lost(self.map_frames(weights, threads, |s, w| s.solve_with(w, &[], None)))
     }
 
     /// `f(solver, item)` for every item, spread over up to `threads` threads, each with its
@@ -437,6 +431,22 @@ impl PhysicalBlend {
             ws: &mut self.ws,
         }
     }
+}
+
+/// The results of [`PhysicalBlend::map_frames`] with every lost item (`None`, a thread that
+/// panicked) reported as an error naming its frame.
+pub(crate) fn report_lost<R, E: From<BlendError>>(
+    slots: Vec<Option<Result<R, E>>>,
+) -> Vec<Result<R, E>> {
+    slots
+        .into_iter()
+        .enumerate()
+        .map(|(k, r)| {
+            r.unwrap_or_else(
+                || Err(BlendError::InvalidOption(format!("frame {k} was lost")).into()),
+            )
+        })
+        .collect()
 }
 
 /// One thread's view of a [`PhysicalBlend`]: the shared rig and that thread's numeric

@@ -68,6 +68,7 @@ mod system;
 pub mod terms;
 pub mod weights;
 
+pub(crate) use blender::report_lost;
 pub use blender::{blend, BlendPredictor, FrameSolver, PhysicalBlend};
 pub use constraints::{stretched_vertices, Components, Constraints, FixedVertices, Gauge};
 pub use interior::{

@@ -28,7 +28,7 @@
 use super::constraints::Components;
 use super::interior::reverse::Neighbourhoods;
 use crate::geom::{kabsch, polar_decomposition};
-use crate::mesh::{Point, ShapeSet, TriMesh};
+use crate::mesh::{sub, Point, ShapeSet, TriMesh};
 use crate::transfer::{GradientOperator, SolverOptions, TransferSolver};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
@@ -62,20 +62,17 @@ impl RotationPredictor {
     /// Poisson solve (no triangles, say), and the linear blend is used instead.
     pub fn new(shapes: &ShapeSet, components: &Components) -> Option<Self> {
         let n = shapes.num_vertices();
+        let mut used = vec![false; n];
+        shapes
+            .triangles()
+            .iter()
+            .flatten()
+            .for_each(|&v| used[v as usize] = true);
+        let (surface, vertices): (Vec<u32>, Vec<u32>) =
+            (0..n as u32).partition(|&v| used[v as usize]);
         let mut local = vec![u32::MAX; n];
-        let mut surface = Vec::new();
-        for t in shapes.triangles() {
-            for &v in t {
-                if local[v as usize] == u32::MAX {
-                    local[v as usize] = 0;
-                }
-            }
-        }
-        for v in 0..n {
-            if local[v] != u32::MAX {
-                local[v] = surface.len() as u32;
-                surface.push(v as u32);
-            }
+        for (k, &v) in surface.iter().enumerate() {
+            local[v as usize] = k as u32;
         }
         let restrict =
             |p: &[Point]| -> Vec<Point> { surface.iter().map(|&v| p[v as usize]).collect() };
@@ -107,9 +104,6 @@ impl RotationPredictor {
         for (v, &c) in components.label.iter().enumerate() {
             members[c as usize].push(v as u32);
         }
-        let vertices: Vec<u32> = (0..n as u32)
-            .filter(|&v| local[v as usize] == u32::MAX)
-            .collect();
         let carried = (!vertices.is_empty()).then(|| {
             let pick =
                 |p: &[Point]| -> Vec<Point> { vertices.iter().map(|&v| p[v as usize]).collect() };
@@ -121,10 +115,7 @@ impl RotationPredictor {
                     let guess =
                         near.guess(&surface_base, &restrict(shapes.positions(s)), &carried_base);
                     let own = pick(shapes.positions(s));
-                    own.iter()
-                        .zip(&guess)
-                        .map(|(y, g)| [y[0] - g[0], y[1] - g[1], y[2] - g[2]])
-                        .collect()
+                    own.iter().zip(&guess).map(|(&y, &g)| sub(y, g)).collect()
                 })
                 .collect();
             Carried {

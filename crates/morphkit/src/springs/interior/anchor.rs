@@ -262,14 +262,19 @@ mod tests {
     use super::*;
     use crate::geom::slerp;
 
-    #[test]
-    fn two_shape_motion_is_the_papers_slerp_about_the_anchor() {
-        let base: Vec<Point> = vec![
+    /// The unit tetrahedron at the origin.
+    fn corner_tetrahedron() -> Vec<Point> {
+        vec![
             [0.0, 0.0, 0.0],
             [1.0, 0.0, 0.0],
             [0.0, 1.0, 0.0],
             [0.0, 0.0, 1.0],
-        ];
+        ]
+    }
+
+    #[test]
+    fn two_shape_motion_is_the_papers_slerp_about_the_anchor() {
+        let base = corner_tetrahedron();
         let r = Rotation3::from_axis_angle(&Vector3::z_axis(), 2.0 * std::f64::consts::PI / 3.0)
             .into_inner();
         let t = Vector3::new(3.0, -1.0, 0.5);
@@ -299,12 +304,7 @@ mod tests {
 
     #[test]
     fn a_turn_of_nearly_half_a_circle_has_a_finite_log() {
-        let base: Vec<Point> = vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-        ];
+        let base = corner_tetrahedron();
         for angle in [std::f64::consts::PI, std::f64::consts::PI - 1e-9] {
             let r = Rotation3::from_axis_angle(&Vector3::y_axis(), angle).into_inner();
             let moved: Vec<Point> = base

@@ -72,7 +72,6 @@ pub struct SurfacePredictor {
     inner: BlendPredictor,
     motion: Option<AnchorMotion>,
     surface: usize,
-    shapes: usize,
 }
 
 impl std::fmt::Debug for SurfacePredictor {
@@ -84,19 +83,13 @@ impl std::fmt::Debug for SurfacePredictor {
 }
 
 impl SurfacePredictor {
-    /// The predictor of `inner` (a blend of `shapes` shapes whose first `surface` vertices
-    /// are the input's), mapped to the world by the anchor's `motion` when there is one.
-    pub(crate) fn new(
-        inner: BlendPredictor,
-        motion: Option<AnchorMotion>,
-        surface: usize,
-        shapes: usize,
-    ) -> Self {
+    /// The predictor of `inner` (a blend whose first `surface` vertices are the input's),
+    /// mapped to the world by the anchor's `motion` when there is one.
+    pub(crate) fn new(inner: BlendPredictor, motion: Option<AnchorMotion>, surface: usize) -> Self {
         Self {
             inner,
             motion,
             surface,
-            shapes,
         }
     }
 
@@ -105,7 +98,7 @@ impl SurfacePredictor {
     pub fn predict(&self, weights: &Weights) -> Result<Vec<Point>, BlendError> {
         let mut p = self.inner.predict(weights)?;
         if let Some(m) = &self.motion {
-            let t = m.at(&weights.coefficients(self.shapes)?);
+            let t = m.at(&weights.coefficients(self.inner.num_shapes())?);
             p.iter_mut().for_each(|x| *x = t.apply(*x));
         }
         p.truncate(self.surface);
@@ -115,8 +108,8 @@ impl SurfacePredictor {
 
 impl From<BlendPredictor> for SurfacePredictor {
     fn from(inner: BlendPredictor) -> Self {
-        let (surface, shapes) = (inner.num_vertices(), inner.num_shapes());
-        Self::new(inner, None, surface, shapes)
+        let surface = inner.num_vertices();
+        Self::new(inner, None, surface)
     }
 }
 
@@ -314,7 +307,6 @@ impl VolumetricBlend {
             self.blend.predictor(),
             self.motion.clone(),
             self.surface.num_vertices(),
-            self.surface.len(),
         )
     }
 

@@ -262,7 +262,7 @@ impl HingeTerm {
             let pos = hv.map(|v| v3(x, v));
             let (r, j) = self.residual_at(&p.values, k, pos);
             let hy = self.second_order(&p.values, k, pos, &r);
-            add_blocks(h, hv, &j, &hy, 2.0 * self.weight[k]);
+            add_block_pairs(None, h, hv, &j, &hy, 2.0 * self.weight[k]);
         }
     }
 
@@ -319,20 +319,9 @@ impl HingeTerm {
     }
 }
 
-/// Adds $w (J^\top J + M^\top H_y M)$ of one hinge: `hy` holds the second-order blocks in the
-/// edge variables $(e, u_1, u_2) = (b - a, c - a, d - a)$, mapped to the corners by $M$.
-fn add_blocks(
-    h: &mut BlockHessian,
-    hv: [u32; 4],
-    j: &[Matrix3<f64>; 4],
-    hy: &[[Matrix3<f64>; 3]; 3],
-    w: f64,
-) {
-    add_block_pairs(None, h, hv, j, hy, w);
-}
-
-/// [`add_blocks`] into `exact`, and, when given, the Gauss–Newton blocks $w J^\top J$ alone
-/// into `projected`.
+/// Adds $w (J^\top J + M^\top H_y M)$ of one hinge to `exact` (`hy` holds the second-order
+/// blocks in the edge variables $(e, u_1, u_2) = (b - a, c - a, d - a)$, mapped to the corners
+/// by $M$) and, when given, the Gauss–Newton blocks $w J^\top J$ alone to `projected`.
 fn add_block_pairs(
     mut projected: Option<&mut BlockHessian>,
     exact: &mut BlockHessian,
