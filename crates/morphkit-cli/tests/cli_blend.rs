@@ -65,17 +65,11 @@ fn blend_writes_frames_reports_and_refuses_bad_input() {
     // α = 0 gives the base back, α = 1 the target.
     for (alpha, want) in [("0", &base), ("1", &target)] {
         let out = d.join(format!("a{alpha}.obj"));
-        ok(&[
-            "blend",
-            "--base",
-            s(&base),
-            "--target",
-            s(&target),
-            "--alpha",
-            alpha,
-            "--out",
-            s(&out),
-        ]);
+        ok(&blend_args(
+            &base,
+            &target,
+            &["--alpha", alpha, "--out", s(&out)],
+        ));
         let (got, want) = (vertices(&out), vertices(want));
         let err = got
             .iter()
@@ -85,19 +79,18 @@ fn blend_writes_frames_reports_and_refuses_bad_input() {
         assert!(err < 1e-5, "α = {alpha}: max error {err}");
     }
     let report = d.join("r.json");
-    ok(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&target),
-        "--frames",
-        "5",
-        "--out",
-        s(&d.join("frames")),
-        "--report",
-        s(&report),
-    ]);
+    ok(&blend_args(
+        &base,
+        &target,
+        &[
+            "--frames",
+            "5",
+            "--out",
+            s(&d.join("frames")),
+            "--report",
+            s(&report),
+        ],
+    ));
     assert!(d.join("frames/frame_0004.obj").is_file());
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
@@ -113,109 +106,76 @@ fn blend_writes_frames_reports_and_refuses_bad_input() {
     }
     // Linear blend with a weights file (CSV with a header).
     std::fs::write(d.join("w.csv"), "w\n0.25\n0.75\n").unwrap();
-    ok(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&target),
-        "--weights-file",
-        s(&d.join("w.csv")),
-        "--linear",
-        "--out",
-        s(&d.join("lin.pc2")),
-    ]);
+    ok(&blend_args(
+        &base,
+        &target,
+        &[
+            "--weights-file",
+            s(&d.join("w.csv")),
+            "--linear",
+            "--out",
+            s(&d.join("lin.pc2")),
+        ],
+    ));
     assert!(d.join("lin.pc2").is_file());
 
-    let e = fails(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&target),
-        "--alpha",
-        "nan",
-        "--out",
-        s(&d.join("x.obj")),
-    ]);
+    let e = fails(&blend_args(
+        &base,
+        &target,
+        &["--alpha", "nan", "--out", s(&d.join("x.obj"))],
+    ));
     assert!(e.contains("not finite"), "{e}");
-    let e = fails(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&target),
-        "--weights",
-        "0.5,0.7",
-        "--convex",
-        "--out",
-        s(&d.join("x.obj")),
-    ]);
+    let e = fails(&blend_args(
+        &base,
+        &target,
+        &[
+            "--weights",
+            "0.5,0.7",
+            "--convex",
+            "--out",
+            s(&d.join("x.obj")),
+        ],
+    ));
     assert!(e.contains("sum to 1"), "{e}");
-    let e = fails(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&target),
-        "--alpha",
-        "0.5",
-        "--out",
-        s(&base),
-    ]);
+    let e = fails(&blend_args(
+        &base,
+        &target,
+        &["--alpha", "0.5", "--out", s(&base)],
+    ));
     assert!(e.contains("overwrite"), "{e}");
-    let e = fails(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&target),
-        "--frames",
-        "3",
-        "--out",
-        s(&d.join("one.obj")),
-    ]);
+    let e = fails(&blend_args(
+        &base,
+        &target,
+        &["--frames", "3", "--out", s(&d.join("one.obj"))],
+    ));
     assert!(e.contains("one frame"), "{e}");
-    let e = fails(&[
-        "blend",
-        "--base",
-        s(&d),
-        "--target",
-        s(&target),
-        "--alpha",
-        "0.5",
-        "--out",
-        s(&d.join("x.obj")),
-    ]);
+    let e = fails(&blend_args(
+        &d,
+        &target,
+        &["--alpha", "0.5", "--out", s(&d.join("x.obj"))],
+    ));
     assert!(e.contains("directory"), "{e}");
     std::fs::write(d.join("fixed.json"), "{\"fixed\": [0]}").unwrap();
-    let e = fails(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&target),
-        "--alpha",
-        "0.5",
-        "--fixed",
-        s(&d.join("fixed.json")),
-        "--out",
-        s(&d.join("x.obj")),
-    ]);
+    let e = fails(&blend_args(
+        &base,
+        &target,
+        &[
+            "--alpha",
+            "0.5",
+            "--fixed",
+            s(&d.join("fixed.json")),
+            "--out",
+            s(&d.join("x.obj")),
+        ],
+    ));
     assert!(e.contains("rotate"), "{e}");
     // Another connectivity: a different generated mesh.
     std::fs::write(d.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
-    let e = fails(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&d.join("tri.obj")),
-        "--alpha",
-        "0.5",
-        "--out",
-        s(&d.join("x.obj")),
-    ]);
+    let e = fails(&blend_args(
+        &base,
+        &d.join("tri.obj"),
+        &["--alpha", "0.5", "--out", s(&d.join("x.obj"))],
+    ));
     assert!(e.contains("vertices"), "{e}");
     assert!(!d.join("x.obj").exists(), "no partial output");
 }

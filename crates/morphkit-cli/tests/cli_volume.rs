@@ -9,23 +9,22 @@ fn interior_and_anchor_blend_writes_frames_and_reports_inversions() {
     ok(&["demo", "--out", s(&d)]);
     let (base, target) = (d.join("base.obj"), d.join("target.obj"));
     let (out, report) = (d.join("frames"), d.join("r.json"));
-    ok(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&target),
-        "--frames",
-        "5",
-        "--interior",
-        "lattice,2",
-        "--anchor",
-        "auto",
-        "--out",
-        s(&out),
-        "--report",
-        s(&report),
-    ]);
+    ok(&blend_args(
+        &base,
+        &target,
+        &[
+            "--frames",
+            "5",
+            "--interior",
+            "lattice,2",
+            "--anchor",
+            "auto",
+            "--out",
+            s(&out),
+            "--report",
+            s(&report),
+        ],
+    ));
     assert!(out.join("frame_0004.obj").is_file());
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
@@ -54,19 +53,11 @@ fn an_open_mesh_with_a_lattice_is_blended_on_its_surface_and_says_so() {
     let (base, target, out) = (d.join("a.obj"), d.join("b.obj"), d.join("half.obj"));
     morphkit::io::write_mesh(&base, &m).unwrap();
     morphkit::io::write_mesh(&target, &bent).unwrap();
-    let (_, err) = run_ok(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&target),
-        "--alpha",
-        "0.5",
-        "--interior",
-        "lattice",
-        "--out",
-        s(&out),
-    ]);
+    let (_, err) = run_ok(&blend_args(
+        &base,
+        &target,
+        &["--alpha", "0.5", "--interior", "lattice", "--out", s(&out)],
+    ));
     // The tube's end holes are small: capped for the inside test, the tube gets its interior.
     assert!(!err.contains("has no interior"), "{err}");
     assert!(out.is_file());
@@ -76,19 +67,18 @@ fn an_open_mesh_with_a_lattice_is_blended_on_its_surface_and_says_so() {
     let (pa, pb) = (d.join("patch-a.obj"), d.join("patch-b.obj"));
     morphkit::io::write_mesh(&pa, &patch).unwrap();
     morphkit::io::write_mesh(&pb, &patch_bent).unwrap();
-    let (_, err) = run_ok(&[
-        "blend",
-        "--base",
-        s(&pa),
-        "--target",
-        s(&pb),
-        "--alpha",
-        "0.5",
-        "--interior",
-        "lattice",
-        "--out",
-        s(&d.join("patch.obj")),
-    ]);
+    let (_, err) = run_ok(&blend_args(
+        &pa,
+        &pb,
+        &[
+            "--alpha",
+            "0.5",
+            "--interior",
+            "lattice",
+            "--out",
+            s(&d.join("patch.obj")),
+        ],
+    ));
     assert!(err.contains("has no interior (open)"), "{err}");
     // Without tetgen on the PATH (an empty PATH for this child only): a clear error.
     let args = [
@@ -122,19 +112,11 @@ fn an_open_mesh_with_a_lattice_is_blended_on_its_surface_and_says_so() {
         let (_, err) = run_ok(&args);
         assert!(err.contains("tetgen needs a closed surface"), "{err}");
     }
-    let err = fails(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&target),
-        "--alpha",
-        "0.5",
-        "--interior",
-        "voxels",
-        "--out",
-        s(&out),
-    ]);
+    let err = fails(&blend_args(
+        &base,
+        &target,
+        &["--alpha", "0.5", "--interior", "voxels", "--out", s(&out)],
+    ));
     assert!(err.contains("unknown kind"), "{err}");
 }
 
@@ -160,21 +142,20 @@ fn a_tetgen_interior_blend_reports_its_tetrahedra() {
     ok(&["demo", "--out", s(&d)]);
     let (base, target) = (d.join("base.obj"), d.join("target.obj"));
     let (out, report) = (d.join("frames"), d.join("r.json"));
-    ok(&[
-        "blend",
-        "--base",
-        s(&base),
-        "--target",
-        s(&target),
-        "--frames",
-        "3",
-        "--interior",
-        "tetgen,1.5",
-        "--out",
-        s(&out),
-        "--report",
-        s(&report),
-    ]);
+    ok(&blend_args(
+        &base,
+        &target,
+        &[
+            "--frames",
+            "3",
+            "--interior",
+            "tetgen,1.5",
+            "--out",
+            s(&out),
+            "--report",
+            s(&report),
+        ],
+    ));
     assert!(out.join("frame_0002.obj").is_file());
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();

@@ -78,3 +78,10 @@ pub fn write_tube(path: &std::path::Path, nu: usize, nv: usize, scale: f64, bend
     }
     std::fs::write(path, text).unwrap();
 }
+
+/// `blend --base BASE --target TARGET` followed by `rest`.
+pub fn blend_args<'a>(base: &'a Path, target: &'a Path, rest: &[&'a str]) -> Vec<&'a str> {
+    let mut v = vec!["blend", "--base", s(base), "--target", s(target)];
+    v.extend_from_slice(rest);
+    v
+}

@@ -66,6 +66,18 @@ impl Builder {
         self.accessors.len() - 1
     }
 
+    /// The triangle list of `mesh` as a u32 index accessor; returns its index.
+    pub(super) fn triangle_indices(&mut self, mesh: &crate::mesh::TriMesh) -> usize {
+        let idx: Vec<u8> = mesh
+            .triangles
+            .iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
+        let count = 3 * mesh.num_triangles();
+        self.scalars(idx, count, UNSIGNED_INT, Some(ELEMENT_ARRAY_BUFFER), None)
+    }
+
     /// A SCALAR accessor of f32 or u32 values (with min/max when `bounds`).
     pub(super) fn scalars(
         &mut self,
@@ -243,20 +255,7 @@ pub(super) fn build_with(
     let mut b = Builder::default();
     let base = to_f32(path, "base", &m.base.positions, None)?;
     let pos = b.vec3(&base);
-    let idx: Vec<u8> = m
-        .base
-        .triangles
-        .iter()
-        .flatten()
-        .flat_map(|i| i.to_le_bytes())
-        .collect();
-    let indices = b.scalars(
-        idx,
-        3 * m.base.num_triangles(),
-        UNSIGNED_INT,
-        Some(ELEMENT_ARRAY_BUFFER),
-        None,
-    );
+    let indices = b.triangle_indices(&m.base);
     // Accessor order: POSITION 0, indices 1, NORMAL 2, then the targets.
     let base_normals = opts
         .normals

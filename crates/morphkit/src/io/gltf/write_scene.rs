@@ -14,9 +14,7 @@ use crate::mesh::{Point, TriMesh};
 use serde_json::{json, Value};
 use std::path::Path;
 
-const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const FLOAT: u32 = 5126;
-const UNSIGNED_INT: u32 = 5125;
 
 /// A rigid mesh with keyed poses.
 #[derive(Clone, Debug, PartialEq)]
@@ -61,20 +59,7 @@ fn add_rigid(
     }
     let pos = to_f32(path, &r.name, &r.mesh.positions, None)?;
     let pos = b.vec3(&pos);
-    let idx: Vec<u8> = r
-        .mesh
-        .triangles
-        .iter()
-        .flatten()
-        .flat_map(|i| i.to_le_bytes())
-        .collect();
-    let indices = b.scalars(
-        idx,
-        3 * r.mesh.num_triangles(),
-        UNSIGNED_INT,
-        Some(ELEMENT_ARRAY_BUFFER),
-        None,
-    );
+    let indices = b.triangle_indices(&r.mesh);
     let meshes = doc["meshes"].as_array_mut().expect("build writes meshes");
     meshes.push(json!({"name": r.name, "primitives": [{"attributes": {"POSITION": pos}, "indices": indices, "mode": 4}]}));
     let mesh = meshes.len() - 1;
