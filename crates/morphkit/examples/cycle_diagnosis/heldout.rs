@@ -293,6 +293,22 @@ pub fn fold_where() {
     let all: Vec<usize> = (0..p.b.num_triangles()).collect();
     summarize("all camel triangles", &all);
     let (lo, hi) = p.b.bounding_box();
+    let rear = extra
+        .iter()
+        .filter(|&&t| {
+            let tri = p.b.triangles[t];
+            let z = tri
+                .iter()
+                .map(|&i| p.b.positions[i as usize][2])
+                .sum::<f64>()
+                / 3.0;
+            (z - lo[2]) / (hi[2] - lo[2]) < 0.3
+        })
+        .count();
+    eprintln!(
+        "  {rear} of the {} extra-fold triangles lie in the rear 30 % of the length (z)",
+        extra.len()
+    );
     let mut top: Vec<(usize, usize)> = per_tri.into_iter().map(|(t, n)| (n, t)).collect();
     top.sort_by(|a, b| b.cmp(a));
     for &(n, t) in top.iter().take(15) {
@@ -309,5 +325,20 @@ pub fn fold_where() {
             "  camel triangle {t:>6}: {n} extra folds; at ({:.2}, {:.2}, {:.2}) of the box; confidence {:.3}; least match cosine {cmin:.3}; largest twist vs warp {twist:.1}°; {} matches",
             rel[0], rel[1], rel[2], conf[t], rf.correspondence.matches_of(t).len()
         );
+        let (alo, ahi) = p.a_ref.bounding_box();
+        for &i in rf.correspondence.matches_of(t) {
+            let tri = p.a_ref.triangles[i as usize];
+            let c = [0, 1, 2].map(|k| {
+                tri.iter()
+                    .map(|&j| p.a_ref.positions[j as usize][k])
+                    .sum::<f64>()
+                    / 3.0
+            });
+            let rel = [0, 1, 2].map(|k| (c[k] - alo[k]) / (ahi[k] - alo[k]));
+            eprintln!(
+                "    matched source triangle {i} at ({:.2}, {:.2}, {:.2}) of the source box",
+                rel[0], rel[1], rel[2]
+            );
+        }
     }
 }
