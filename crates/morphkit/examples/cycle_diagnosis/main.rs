@@ -1,13 +1,17 @@
 //! Issue 9, diagnosis of the cycle-consistency error (horse → camel → horse, cat → dog →
 //! cat). **A diagnostic, not a check**: it prints where the round trip's error comes from
 //! (the checks are in `tests/transfer_quality_real_data.rs`). Run it with
-//! `MORPHKIT_DATA=… cargo run --release -p morphkit --example cycle_diagnosis -- [diagnosis|variants|folds|explore]`
+//! `MORPHKIT_DATA=… cargo run --release -p morphkit --example cycle_diagnosis -- [diagnosis|variants|folds|explore|heldout|foldwhere]`
 //! (default `diagnosis`; `DIAG_DUMP=dir` also writes per-vertex error maps as CSV there;
-//! `explore` measures the correspondence and transfer variants given in `EXPLORE`).
+//! `explore` measures the correspondence and transfer variants given in `EXPLORE`;
+//! `heldout` and `foldwhere` the held-out animations and the stretch-turning variants, see
+//! `heldout.rs`).
 
 #[path = "../../tests/common/mod.rs"]
 mod common;
+mod heldout;
 mod studies;
+mod turns;
 
 use studies::{combine_variants, cycle_error_diagnosis, explore, fold_locations};
 
@@ -401,8 +405,10 @@ fn main() {
         "variants" => combine_variants(),
         "folds" => fold_locations(),
         "explore" => explore(),
+        "heldout" => heldout::heldout(),
+        "foldwhere" => heldout::fold_where(),
         other => {
-            eprintln!("unknown diagnostic '{other}': use diagnosis, variants, folds or explore");
+            eprintln!("unknown diagnostic '{other}': use diagnosis, variants, folds, explore, heldout or foldwhere");
             std::process::exit(2);
         }
     }
