@@ -87,10 +87,19 @@ fn correspond_then_transfer_to_obj_frames_and_pc2() {
         s(&d.join("ws.obj")),
         "--report",
         s(&d.join("corr-report.json")),
+        "--confidence",
+        s(&d.join("confidence.ply")),
     ]);
     assert!(
         err.contains("correspondence: 324 target triangles"),
         "{err}"
+    );
+    assert!(err.contains("match confidence: mean"), "{err}");
+    let ply = std::fs::read(d.join("confidence.ply")).unwrap();
+    let header = String::from_utf8_lossy(&ply[..ply.len().min(400)]).to_string();
+    assert!(
+        header.starts_with("ply") && header.contains("red"),
+        "{header}"
     );
     let c: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&corr).unwrap()).unwrap();
@@ -100,6 +109,30 @@ fn correspond_then_transfer_to_obj_frames_and_pc2() {
         serde_json::from_str(&std::fs::read_to_string(d.join("corr-report.json")).unwrap())
             .unwrap();
     assert_eq!(rep["marker_residuals"].as_array().unwrap().len(), 12);
+    // A tube onto a wider tube with matching markers: its matches face its way almost
+    // everywhere, and the doubtful triangles listed are the fraction given.
+    let mc = &rep["match_confidence"];
+    let mean = mc["mean"].as_f64().unwrap();
+    assert!(mean > 0.8 && mean <= 1.0, "{mc}");
+    let low = mc["low_triangles"].as_array().unwrap().len() as f64;
+    assert!(
+        (mc["low_fraction"].as_f64().unwrap() - low / 324.0).abs() < 1e-12,
+        "{mc}"
+    );
+    let e = fails(&[
+        "correspond",
+        "--source",
+        s(&src),
+        "--target",
+        s(&tgt),
+        "--markers",
+        s(&markers),
+        "--out",
+        s(&d.join("c2.json")),
+        "--confidence",
+        s(&d.join("confidence.obj")),
+    ]);
+    assert!(e.contains("--confidence") && e.contains(".ply"), "{e}");
 
     let out = d.join("out");
     let report = d.join("report.json");

@@ -6,8 +6,8 @@ use crate::util::{check_positive, check_range};
 use anyhow::Context;
 use morphkit::io;
 use morphkit::transfer::{
-    correspond, correspondence_quality, cycle_consistency, CorrespondenceOptions,
-    CorrespondenceResult, Markers, RefineOptions, TransferOptions,
+    correspond, correspondence_quality, cycle_consistency, match_confidence, CorrespondenceOptions,
+    CorrespondenceResult, GradientCombine, Markers, RefineOptions, TransferOptions, LOW_CONFIDENCE,
 };
 use serde_json::json;
 use std::path::PathBuf;
@@ -20,13 +20,18 @@ Examples:
       --warped-source cat-warped.obj --warped-target dog-warped.obj --report corr-report.json
   morphkit correspond --source horse.obj.gz --target camel.obj.gz --markers m.json --out corr.json \\
       --refine --report q.json --cycle-frames 'horse-*.obj.gz'
+  morphkit correspond --source horse.obj.gz --target camel.obj.gz --markers m.json --out corr.json \\
+      --confidence camel-confidence.ply
 
 Markers are JSON {\"pairs\": [[source_vertex, target_vertex], ...]}, 0-based.
 The report lists each marker's residual after warping, the target triangles whose only
 match fails the normal test (places that need more markers), and quality metrics that need no
 reference answer: the fraction of target triangles passing the normal test, the fraction of
-source triangles reached, marker residuals. `morphkit transfer --markers … --report` adds the
-cycle consistency (there and back with the reversed markers) and fold counts.";
+source triangles reached, marker residuals, and the match confidence: per target triangle, how
+well its matches' reference normals agree with its own (1 alike, towards 0 facing away: its
+motion comes through a large turn or from the wrong side; --confidence colours the target by
+it, white 1 to red 0; markers near red places help). `morphkit transfer --markers … --report`
+adds the cycle consistency (there and back with the reversed markers) and fold counts.";
 
 /// Arguments of `morphkit correspond`.
 #[derive(clap::Args, Debug)]
@@ -62,6 +67,10 @@ pub struct CorrespondArgs {
     /// Write a JSON report (timings, marker residuals, normal violations, quality metrics).
     #[arg(long, value_name = "JSON")]
     pub report: Option<PathBuf>,
+    /// Write the target as a binary PLY coloured per triangle by its match confidence
+    /// (white 1: the matches face as it does; red 0: they face away; add markers there).
+    #[arg(long, value_name = "PLY")]
+    pub confidence: Option<PathBuf>,
     /// Refine the warp by closest points (Sumner & Popović 2004, Sec. 5) before matching:
     /// lower cycle-consistency error and fewer sharp folds, about twice the time.
     #[arg(long)]
@@ -157,6 +166,14 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
     if !args.cycle_frames.is_empty() && args.report.is_none() {
         anyhow::bail!("--cycle-frames needs --report (the cycle consistency goes there)");
     }
+    if let Some(p) = &args.confidence {
+        if io::Format::from_path(p) != Some(io::Format::Ply) {
+            anyhow::bail!(
+                "--confidence {}: the confidence colours are written as .ply",
+                p.display()
+            );
+        }
+    }
     let cycle_files = if args.cycle_frames.is_empty() {
         None
     } else {
@@ -175,6 +192,7 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
         .output_opt("--warped-source", args.warped_source.as_ref(), Kind::Mesh)
         .output_opt("--warped-target", args.warped_target.as_ref(), Kind::Mesh)
         .output_opt("--report", args.report.as_ref(), Kind::Json)
+        .output_opt("--confidence", args.confidence.as_ref(), Kind::Mesh)
         .check()?;
     crate::util::announce_reading(&inputs);
     let source = io::read_mesh(&args.source)?;
@@ -191,6 +209,26 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
     })?;
     let secs = t0.elapsed().as_secs_f64();
     print_summary(&r, secs);
+    let confidence = match_confidence(
+        &source,
+        &target,
+        &r.correspondence,
+        GradientCombine::default(),
+    )?;
+    let low: Vec<usize> = (0..confidence.len())
+        .filter(|&t| confidence[t] < LOW_CONFIDENCE)
+        .collect();
+    let mean_confidence = confidence.iter().sum::<f64>() / confidence.len().max(1) as f64;
+    let low_fraction = low.len() as f64 / confidence.len().max(1) as f64;
+    eprintln!(
+        "match confidence: mean {mean_confidence:.2}; {:.1} % of the target triangles below {LOW_CONFIDENCE} (their matches face away in the reference meshes{})",
+        100.0 * low_fraction,
+        if args.confidence.is_some() { "" } else { "; --confidence FILE.ply shows where" }
+    );
+    if let Some(p) = &args.confidence {
+        let colors = confidence.iter().map(|&c| io::diverging(1.0 - c)).collect();
+        outputs.colored_ply(p, &target, &io::Colors::PerFace(colors))?;
+    }
     outputs.text(&args.out, &r.correspondence.to_json())?;
     if let Some(p) = &args.warped_source {
         outputs.mesh(p, &source.with_positions(r.warped_source.clone()))?;
@@ -203,6 +241,12 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
         v["source"] = json!(args.source);
         v["target"] = json!(args.target);
         v["correspondence"] = json!(args.out);
+        v["match_confidence"] = json!({
+            "mean": mean_confidence,
+            "low_threshold": LOW_CONFIDENCE,
+            "low_fraction": low_fraction,
+            "low_triangles": low,
+        });
         if let Some(c) = &cycle_files {
             let frames = io::read_shape_set(&c.files)?;
             frames

@@ -94,7 +94,7 @@ pub struct AnimationTransfer {
 type LocalFrames = (Vec<Vector3<f64>>, Vec<Vector3<f64>>);
 
 /// Unit normals of `m`'s triangles (zero for a degenerate one).
-fn unit_normals(m: &TriMesh) -> Vec<Vector3<f64>> {
+pub(crate) fn unit_normals(m: &TriMesh) -> Vec<Vector3<f64>> {
     (0..m.num_triangles())
         .map(|t| {
             let n = Vector3::from(m.triangle_normal(t));

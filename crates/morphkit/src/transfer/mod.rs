@@ -38,8 +38,8 @@ pub use laplacian::{mean_value_laplacian, LaplacianOptions, MeanValueLaplacian};
 pub use lsmesh::{least_squares_mesh, LeastSquaresMesh, LsMeshOptions, OMEGA};
 pub use markers::{Markers, MIN_MARKERS};
 pub use quality::{
-    correspondence_quality, cycle_consistency, fold_count, sharp_folds, CorrespondenceQuality,
-    CycleConsistency, FoldCount,
+    correspondence_quality, cycle_consistency, fold_count, match_confidence, sharp_folds,
+    CorrespondenceQuality, CycleConsistency, FoldCount, LOW_CONFIDENCE,
 };
 pub use rig::{transfer_rig, RigOptions, RigTransfer, TransferredShape};
 pub use solve::{SolverOptions, TransferSolver, TriangleWeighting};

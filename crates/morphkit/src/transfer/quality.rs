@@ -9,13 +9,17 @@
 //! - **Correspondence statistics** ([`correspondence_quality`]): the fraction of target
 //!   triangles whose matches all pass the normal test, the fraction of source triangles that
 //!   reach some target triangle, and the marker residuals.
+//! - **Match confidence** ([`match_confidence`]): per target triangle, how well its matches'
+//!   reference normals agree with its own; low where the correspondence takes a triangle's
+//!   motion from source triangles that face away (places that need markers).
 //! - **Folds** ([`fold_count`]): triangles of a transferred frame that face against their
 //!   wanted orientation ([`super::FlipCheck`]), and *sharp folds*: interior edges whose two
 //!   triangles' normals are more than 120° apart in the frame but less than 120° apart in the
 //!   target reference (a crease the transfer made).
 
-use super::animation::{AnimationTransfer, TransferOptions};
+use super::animation::{unit_normals, AnimationTransfer, TransferOptions};
 use super::correspondence::Correspondence;
+use super::correspondence::GradientCombine;
 use super::error::TransferError;
 use crate::mesh::{dot, norm, sub, triangle_normal, Point, Topology, TriMesh};
 use nalgebra::Matrix3;
@@ -115,6 +119,27 @@ pub fn correspondence_quality(c: &Correspondence) -> CorrespondenceQuality {
     }
 }
 
+/// Confidence below which [`match_confidence`] counts a target triangle as doubtful: its
+/// matches' reference normals are, on average, about 65° or more away from its own
+/// ($\cos^4(\theta/2) = 0.5$ at θ ≈ 65°).
+pub const LOW_CONFIDENCE: f64 = 0.5;
+
+/// The confidence of every target triangle's matches in the reference meshes:
+/// [`Correspondence::local_confidence`] with the unit reference normals of `source` and
+/// `target` and the `combine` weights, in [[`CONFIDENCE_FLOOR`](super::CONFIDENCE_FLOOR), 1].
+/// 1 where every match faces the way the target triangle does (a mesh onto itself), near 0
+/// where its matches face away, so that its motion is carried over through a large turn or
+/// from the wrong side; more markers near such triangles help. `#T_target` values.
+pub fn match_confidence(
+    source: &TriMesh,
+    target: &TriMesh,
+    c: &Correspondence,
+    combine: GradientCombine,
+) -> Result<Vec<f64>, TransferError> {
+    c.check(source, target)?;
+    Ok(c.local_confidence(&unit_normals(source), &unit_normals(target), combine))
+}
+
 /// Cycle consistency of the correspondences `forward` (A → B) and `backward` (B → A, from
 /// the same markers reversed) on the frames `frames` of `a_reference` (each #V_A × 3):
 /// see the [module docs](self). Both transfers use `opts` (the translation convention maps
@@ -212,5 +237,45 @@ mod tests {
         );
         let q = correspondence_quality(&id);
         assert_eq!((q.normal_pass_fraction, q.source_coverage), (1.0, 1.0));
+    }
+
+    #[test]
+    fn match_confidence_is_one_onto_itself_and_low_where_the_target_faces_away() {
+        let m = sphere(12, 8, 1.0);
+        let id = Correspondence::identity(&m);
+        let combine = GradientCombine::default();
+        let c = match_confidence(&m, &m, &id, combine).unwrap();
+        assert_eq!(c.len(), m.num_triangles());
+        assert!(c.iter().all(|&x| (x - 1.0).abs() < 1e-12), "{c:?}");
+        // The target with every triangle's orientation reversed: each match faces away.
+        let mut inside_out = m.clone();
+        for t in &mut inside_out.triangles {
+            t.swap(1, 2);
+        }
+        let away = match_confidence(&m, &inside_out, &id, combine).unwrap();
+        assert!(away.iter().all(|&x| x < LOW_CONFIDENCE), "{away:?}");
+        // The upper half turned inside out: only those triangles lose confidence.
+        let mut half = m.clone();
+        let flipped: Vec<bool> = (0..m.num_triangles())
+            .map(|t| {
+                m.triangles[t]
+                    .iter()
+                    .map(|&v| m.positions[v as usize][2])
+                    .sum::<f64>()
+                    > 0.0
+            })
+            .collect();
+        for (t, &f) in half.triangles.iter_mut().zip(&flipped) {
+            if f {
+                t.swap(1, 2);
+            }
+        }
+        let part = match_confidence(&m, &half, &id, combine).unwrap();
+        for (t, (&x, &f)) in part.iter().zip(&flipped).enumerate() {
+            assert_eq!(x < LOW_CONFIDENCE, f, "triangle {t}: {x}");
+        }
+        // A correspondence of other meshes is refused.
+        let other = grid(4, 3, 1.0);
+        assert!(match_confidence(&m, &other, &id, combine).is_err());
     }
 }
