@@ -9,10 +9,10 @@ use crate::mesh::from_arrays;
 use morphkit::mesh::TriMesh;
 use morphkit::transfer::rig::{RigOptions, RigTransfer};
 use morphkit::transfer::{
-    correspond, AnimationTransfer, Correspondence, CorrespondenceOptions, GradientCombine, Markers,
-    TransferOptions, TranslationMode,
+    correspond, match_confidence, AnimationTransfer, Correspondence, CorrespondenceOptions,
+    GradientCombine, Markers, TransferOptions, TranslationMode,
 };
-use numpy::{PyArray2, PyArray3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -141,6 +141,30 @@ impl PyCorrespondence {
     #[getter]
     fn normal_violations(&self) -> Vec<u32> {
         self.inner.normal_violations.clone()
+    }
+
+    /// Per target triangle, the confidence of its matches in the reference meshes
+    /// (`transfer::match_confidence`, as `morphkit correspond` reports it): 1 where the
+    /// matches face as the triangle does, towards 0 where they face away (below 0.5: about 65°
+    /// or more; places that need markers). `(n_target_triangles,)` float64.
+    #[pyo3(signature = (vs, fs, vt, ft, combine = "inverse-distance"))]
+    fn match_confidence<'py>(
+        &self,
+        py: Python<'py>,
+        vs: &Bound<'py, PyAny>,
+        fs: &Bound<'py, PyAny>,
+        vt: &Bound<'py, PyAny>,
+        ft: &Bound<'py, PyAny>,
+        combine: &str,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let combine = combine_of(combine)?;
+        let source = from_arrays("source", vs, fs)?;
+        let target = from_arrays("target", vt, ft)?;
+        let c = &self.inner;
+        let v = py
+            .detach(|| match_confidence(&source, &target, c, combine))
+            .py(Kind::Transfer)?;
+        Ok(numpy::ndarray::Array1::from(v).into_pyarray(py))
     }
 
     /// The warped source and target vertices `(WS, WT)` of :meth:`from_markers`, or `None`.

@@ -22,6 +22,19 @@ def test_identity_self_transfer_is_exact():
     np.testing.assert_array_equal(t.transfer(frames[1]), out[1])
 
 
+def test_match_confidence_is_one_onto_itself_and_low_inside_out():
+    V, F = tube(8, 8)
+    F = np.asarray(F)
+    c = morphkit.Correspondence.identity(V, F)
+    conf = c.match_confidence(V, F, V, F)
+    assert conf.shape == (len(F),)
+    assert np.abs(conf - 1.0).max() < 1e-12
+    away = c.match_confidence(V, F, V, F[:, [0, 2, 1]], combine="mean")
+    assert (away < 0.5).all()
+    with pytest.raises(morphkit.TransferError):
+        c.match_confidence(V, F, V[:10], F[:2])
+
+
 def test_save_load_round_trip(tmp_path):
     V, F = tube(8, 8)
     c = morphkit.Correspondence.identity(V, F)
