@@ -181,9 +181,16 @@ fn correspond_then_transfer_to_obj_frames_and_pc2() {
         "--out",
         s(&pc2),
     ]);
-    args.push("--fixed-vertex");
-    ok(&args);
+    let rep2 = d.join("markers-report.json");
+    args.extend(["--fixed-vertex", "--report", s(&rep2)]);
+    let (_, err) = run_ok(&args);
     assert!(std::fs::metadata(&pc2).unwrap().len() > 3 * 180 * 12);
+    // The correspondence computed from markers reports its match confidence too, the same as
+    // `correspond` gives for the same meshes and markers.
+    assert!(err.contains("match confidence: mean"), "{err}");
+    let rep2: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&rep2).unwrap()).unwrap();
+    assert_eq!(rep2["correspondence"]["match_confidence"], *mc);
 }
 
 #[test]

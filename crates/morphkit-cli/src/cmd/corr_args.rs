@@ -2,7 +2,7 @@
 //! (the correspondence is computed first) or a correspondence file, how matched gradients
 //! combine, and the optional closest-point refinement.
 
-use super::correspond::{print_summary, summary};
+use super::correspond::{confidence_summary, print_summary, summary};
 use anyhow::{bail, Context};
 use morphkit::transfer::{
     correspond, Correspondence, CorrespondenceOptions, GradientCombine, Markers, RefineOptions,
@@ -85,6 +85,14 @@ impl CorrespondenceArgs {
             let secs = t0.elapsed().as_secs_f64();
             print_summary(&r, secs);
             report["correspondence"] = summary(&r, secs);
+            let (_, conf) = confidence_summary(
+                source,
+                target,
+                &r.correspondence,
+                self.combine(),
+                "; `morphkit correspond --confidence FILE.ply` shows where",
+            )?;
+            report["correspondence"]["match_confidence"] = conf;
             return Ok(Obtained {
                 correspondence: r.correspondence,
                 computed_from: Some((markers, copts)),

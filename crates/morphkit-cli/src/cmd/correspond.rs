@@ -5,9 +5,11 @@ use crate::outputs::{Kind, Plan};
 use crate::util::{check_positive, check_range};
 use anyhow::Context;
 use morphkit::io;
+use morphkit::mesh::TriMesh;
 use morphkit::transfer::{
-    correspond, correspondence_quality, cycle_consistency, match_confidence, CorrespondenceOptions,
-    CorrespondenceResult, GradientCombine, Markers, RefineOptions, TransferOptions, LOW_CONFIDENCE,
+    correspond, correspondence_quality, cycle_consistency, match_confidence, Correspondence,
+    CorrespondenceOptions, CorrespondenceResult, GradientCombine, Markers, RefineOptions,
+    TransferOptions, LOW_CONFIDENCE,
 };
 use serde_json::json;
 use std::path::PathBuf;
@@ -125,6 +127,35 @@ pub fn summary(r: &CorrespondenceResult, seconds: f64) -> serde_json::Value {
     })
 }
 
+/// The [`match_confidence`] of `c`: prints its mean and the share below [`LOW_CONFIDENCE`]
+/// (followed by `hint`), and returns the values with their JSON summary for a report.
+pub fn confidence_summary(
+    source: &TriMesh,
+    target: &TriMesh,
+    c: &Correspondence,
+    combine: GradientCombine,
+    hint: &str,
+) -> anyhow::Result<(Vec<f64>, serde_json::Value)> {
+    let confidence = match_confidence(source, target, c, combine)?;
+    let low: Vec<usize> = (0..confidence.len())
+        .filter(|&t| confidence[t] < LOW_CONFIDENCE)
+        .collect();
+    let n = confidence.len().max(1) as f64;
+    let mean = confidence.iter().sum::<f64>() / n;
+    let low_fraction = low.len() as f64 / n;
+    eprintln!(
+        "match confidence: mean {mean:.2}; {:.1} % of the target triangles below {LOW_CONFIDENCE} (their matches face away in the reference meshes{hint})",
+        100.0 * low_fraction,
+    );
+    let summary = json!({
+        "mean": mean,
+        "low_threshold": LOW_CONFIDENCE,
+        "low_fraction": low_fraction,
+        "low_triangles": low,
+    });
+    Ok((confidence, summary))
+}
+
 /// Prints the human-readable summary.
 pub fn print_summary(r: &CorrespondenceResult, seconds: f64) {
     let c = &r.correspondence;
@@ -209,22 +240,18 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
     })?;
     let secs = t0.elapsed().as_secs_f64();
     print_summary(&r, secs);
-    let confidence = match_confidence(
+    let hint = if args.confidence.is_some() {
+        ""
+    } else {
+        "; --confidence FILE.ply shows where"
+    };
+    let (confidence, confidence_json) = confidence_summary(
         &source,
         &target,
         &r.correspondence,
         GradientCombine::default(),
+        hint,
     )?;
-    let low: Vec<usize> = (0..confidence.len())
-        .filter(|&t| confidence[t] < LOW_CONFIDENCE)
-        .collect();
-    let mean_confidence = confidence.iter().sum::<f64>() / confidence.len().max(1) as f64;
-    let low_fraction = low.len() as f64 / confidence.len().max(1) as f64;
-    eprintln!(
-        "match confidence: mean {mean_confidence:.2}; {:.1} % of the target triangles below {LOW_CONFIDENCE} (their matches face away in the reference meshes{})",
-        100.0 * low_fraction,
-        if args.confidence.is_some() { "" } else { "; --confidence FILE.ply shows where" }
-    );
     if let Some(p) = &args.confidence {
         let colors = confidence.iter().map(|&c| io::diverging(1.0 - c)).collect();
         outputs.colored_ply(p, &target, &io::Colors::PerFace(colors))?;
@@ -241,12 +268,7 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
         v["source"] = json!(args.source);
         v["target"] = json!(args.target);
         v["correspondence"] = json!(args.out);
-        v["match_confidence"] = json!({
-            "mean": mean_confidence,
-            "low_threshold": LOW_CONFIDENCE,
-            "low_fraction": low_fraction,
-            "low_triangles": low,
-        });
+        v["match_confidence"] = confidence_json;
         if let Some(c) = &cycle_files {
             let frames = io::read_shape_set(&c.files)?;
             frames
