@@ -65,12 +65,15 @@ impl CorrespondenceArgs {
     }
 
     /// Computes the correspondence from `source` to `target` (with --markers) or reads it, and
-    /// records how in `report["correspondence"]`.
+    /// records how in `report["correspondence"]`; with `confidence`, a computed one's match
+    /// confidence too (meaningful where source and target are placed alike: `rig` aligns
+    /// the source to the target only later, so it asks for none).
     pub fn obtain(
         &self,
         source: &TriMesh,
         target: &TriMesh,
         report: &mut serde_json::Value,
+        confidence: bool,
     ) -> anyhow::Result<Obtained> {
         self.require()?;
         if let Some(m) = &self.markers {
@@ -85,14 +88,16 @@ impl CorrespondenceArgs {
             let secs = t0.elapsed().as_secs_f64();
             print_summary(&r, secs);
             report["correspondence"] = summary(&r, secs);
-            let (_, conf) = confidence_summary(
-                source,
-                target,
-                &r.correspondence,
-                self.combine(),
-                "; `morphkit correspond --confidence FILE.ply` shows where",
-            )?;
-            report["correspondence"]["match_confidence"] = conf;
+            if confidence {
+                let (_, conf) = confidence_summary(
+                    source,
+                    target,
+                    &r.correspondence,
+                    self.combine(),
+                    "; `morphkit correspond --confidence FILE.ply` shows where",
+                )?;
+                report["correspondence"]["match_confidence"] = conf;
+            }
             return Ok(Obtained {
                 correspondence: r.correspondence,
                 computed_from: Some((markers, copts)),

@@ -166,7 +166,7 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
     });
     let corr = args
         .corr
-        .obtain(&neutral, &target, &mut report)?
+        .obtain(&neutral, &target, &mut report, false)?
         .correspondence;
     let mut opts = RigOptions::default();
     opts.transfer.combine = args.corr.combine();

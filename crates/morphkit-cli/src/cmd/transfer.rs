@@ -172,7 +172,7 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         "out": args.out,
     });
     let mut cycle = None;
-    let obtained = args.corr.obtain(&source_ref, &target, &mut report)?;
+    let obtained = args.corr.obtain(&source_ref, &target, &mut report, true)?;
     if args.report.is_some() {
         cycle = obtained.computed_from;
     }
