@@ -73,7 +73,7 @@ fn setup(name: &str) -> (PathBuf, PathBuf, Vec<PathBuf>, PathBuf, PathBuf) {
 fn correspond_then_transfer_to_obj_frames_and_pc2() {
     let (d, src, frames, tgt, markers) = setup("ok");
     let corr = d.join("corr.json");
-    let (_, err) = run_ok(&[
+    let correspond = [
         "correspond",
         "--source",
         s(&src),
@@ -81,15 +81,23 @@ fn correspond_then_transfer_to_obj_frames_and_pc2() {
         s(&tgt),
         "--markers",
         s(&markers),
-        "--out",
-        s(&corr),
-        "--warped-source",
-        s(&d.join("ws.obj")),
-        "--report",
-        s(&d.join("corr-report.json")),
-        "--confidence",
-        s(&d.join("confidence.ply")),
-    ]);
+    ];
+    let (_, err) = run_ok(
+        &[
+            &correspond[..],
+            &[
+                "--out",
+                s(&corr),
+                "--warped-source",
+                s(&d.join("ws.obj")),
+                "--report",
+                s(&d.join("corr-report.json")),
+                "--confidence",
+                s(&d.join("confidence.ply")),
+            ],
+        ]
+        .concat(),
+    );
     assert!(
         err.contains("correspondence: 324 target triangles"),
         "{err}"
@@ -119,19 +127,10 @@ fn correspond_then_transfer_to_obj_frames_and_pc2() {
         (mc["low_fraction"].as_f64().unwrap() - low / 324.0).abs() < 1e-12,
         "{mc}"
     );
-    let e = fails(&[
-        "correspond",
-        "--source",
-        s(&src),
-        "--target",
-        s(&tgt),
-        "--markers",
-        s(&markers),
-        "--out",
-        s(&d.join("c2.json")),
-        "--confidence",
-        s(&d.join("confidence.obj")),
-    ]);
+    let c2 = d.join("c2.json");
+    let bad_ply = d.join("confidence.obj");
+    let rest = ["--out", s(&c2), "--confidence", s(&bad_ply)];
+    let e = fails(&[&correspond[..], &rest[..]].concat());
     assert!(e.contains("--confidence") && e.contains(".ply"), "{e}");
 
     let out = d.join("out");
