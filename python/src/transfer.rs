@@ -158,12 +158,10 @@ impl PyCorrespondence {
         combine: &str,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let combine = combine_of(combine)?;
-        let source = from_arrays("source", vs, fs)?;
-        let target = from_arrays("target", vt, ft)?;
         let c = &self.inner;
-        let v = py
-            .detach(|| match_confidence(&source, &target, c, combine))
-            .py(Kind::Transfer)?;
+        let (v, _, _) = build(py, [vs, fs, vt, ft], |s, t| {
+            match_confidence(s, t, c, combine)
+        })?;
         Ok(numpy::ndarray::Array1::from(v).into_pyarray(py))
     }
 
