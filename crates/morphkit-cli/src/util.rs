@@ -101,6 +101,15 @@ pub fn check_range(
     Ok(value)
 }
 
+/// Refuses a colour output `path` of `flag` that is not a `.ply` file (colours are written
+/// only as PLY); `what` names the colours in the message.
+pub fn require_ply(flag: &str, path: &std::path::Path, what: &str) -> anyhow::Result<()> {
+    if morphkit::io::Format::from_path(path) != Some(morphkit::io::Format::Ply) {
+        anyhow::bail!("{flag} {}: {what} are written as .ply", path.display());
+    }
+    Ok(())
+}
+
 /// `value` of `flag` when it is finite and positive.
 pub fn check_positive(flag: &str, value: f64) -> anyhow::Result<f64> {
     check_range(flag, value, 0.0, true, f64::INFINITY)

@@ -198,12 +198,7 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
         anyhow::bail!("--cycle-frames needs --report (the cycle consistency goes there)");
     }
     if let Some(p) = &args.confidence {
-        if io::Format::from_path(p) != Some(io::Format::Ply) {
-            anyhow::bail!(
-                "--confidence {}: the confidence colours are written as .ply",
-                p.display()
-            );
-        }
+        crate::util::require_ply("--confidence", p, "the confidence colours")?;
     }
     let cycle_files = if args.cycle_frames.is_empty() {
         None

@@ -71,12 +71,7 @@ pub fn run(args: &FlexArgs) -> anyhow::Result<()> {
     inputs.extend(args.target.iter().cloned());
     inputs.extend(args.markers.iter().cloned());
     inputs.extend(args.correspondence.iter().cloned());
-    if io::Format::from_path(&args.out) != Some(io::Format::Ply) {
-        anyhow::bail!(
-            "--out {}: flexibility colours are written as .ply",
-            args.out.display()
-        );
-    }
+    crate::util::require_ply("--out", &args.out, "flexibility colours")?;
     let mut outputs = Plan::new(&inputs)
         .output("--out", &args.out, Kind::Mesh)
         .output_opt("--json", args.json.as_ref(), Kind::Json)

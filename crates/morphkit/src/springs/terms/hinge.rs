@@ -319,6 +319,12 @@ impl HingeTerm {
     }
 }
 
+/// `w m` as a block (`m` scaled first, then copied: the rounding of every caller is the same).
+fn weighted(m: &Matrix3<f64>, w: f64) -> Block {
+    let m = m * w;
+    std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]))
+}
+
 /// Adds $w (J^\top J + M^\top H_y M)$ of one hinge to `exact` (`hy` holds the second-order
 /// blocks in the edge variables $(e, u_1, u_2) = (b - a, c - a, d - a)$, mapped to the corners
 /// by $M$) and, when given, the Gauss–Newton blocks $w J^\top J$ alone to `projected`.
@@ -339,9 +345,7 @@ fn add_block_pairs(
         for v in u..4 {
             let jtj = j[u].transpose() * j[v];
             if let Some(ph) = projected.as_deref_mut() {
-                let m = jtj * w;
-                let b: Block = std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]));
-                ph.add(hv[u] as usize, hv[v] as usize, &b);
+                ph.add(hv[u] as usize, hv[v] as usize, &weighted(&jtj, w));
             }
             let mut blk = jtj;
             for (pp, mp) in MAP.iter().enumerate() {
@@ -434,8 +438,7 @@ impl EnergyTerm for HingeTerm {
             let hv = self.hinges[k];
             for u in 0..4 {
                 for v in u..4 {
-                    let m = j[u].transpose() * j[v] * w;
-                    let b: Block = std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]));
+                    let b = weighted(&(j[u].transpose() * j[v]), w);
                     h.add(hv[u] as usize, hv[v] as usize, &b);
                 }
             }

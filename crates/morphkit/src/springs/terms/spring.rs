@@ -68,37 +68,57 @@ fn diff(x: &[f64], i: usize, j: usize) -> [f64; 3] {
 /// trace average), so that no NaN can arise.
 #[inline]
 pub fn spring_block(d: [f64; 3], r: f64, k: f64, projected: bool) -> super::Block {
-    let (p, e) = spring_blocks(d, r, k);
-    if projected {
-        p
-    } else {
-        e
+    match direction(d, r) {
+        None => k_identity(k),
+        Some((u, t)) => block(u, k, if projected { t.max(0.0) } else { t }),
     }
 }
 
 /// Both blocks of [`spring_block`] at once: `(projected, exact)`.
 fn spring_blocks(d: [f64; 3], r: f64, k: f64) -> (super::Block, super::Block) {
-    let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-    if l <= 1e-300 {
-        let b = [[k, 0.0, 0.0], [0.0, k, 0.0], [0.0, 0.0, k]];
-        return (b, b);
-    }
-    let u = [d[0] / l, d[1] / l, d[2] / l];
-    let t = 1.0 - r / l;
-    let block = |t: f64| {
-        let mut b = [[0.0; 3]; 3];
-        for a in 0..3 {
-            for c in 0..3 {
-                let uu = u[a] * u[c];
-                let id = if a == c { 1.0 } else { 0.0 };
-                b[a][c] = k * (t * (id - uu) + uu);
-            }
+    match direction(d, r) {
+        None => (k_identity(k), k_identity(k)),
+        Some((u, t)) => {
+            let exact = block(u, k, t);
+            let projected = if t >= 0.0 { exact } else { block(u, k, 0.0) };
+            (projected, exact)
         }
-        b
-    };
-    let exact = block(t);
-    let projected = if t >= 0.0 { exact } else { block(0.0) };
-    (projected, exact)
+    }
+}
+
+/// The unit direction of `d` and the transverse coefficient $1 - \bar r / l$; `None` for a
+/// spring of zero length.
+#[inline]
+fn direction(d: [f64; 3], r: f64) -> Option<([f64; 3], f64)> {
+    let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    (l > 1e-300).then(|| ([d[0] / l, d[1] / l, d[2] / l], 1.0 - r / l))
+}
+
+#[inline]
+fn k_identity(k: f64) -> super::Block {
+    [[k, 0.0, 0.0], [0.0, k, 0.0], [0.0, 0.0, k]]
+}
+
+/// $k \left[t (I - u u^\top) + u u^\top\right]$.
+#[inline]
+fn block(u: [f64; 3], k: f64, t: f64) -> super::Block {
+    let mut b = [[0.0; 3]; 3];
+    for a in 0..3 {
+        for c in 0..3 {
+            let uu = u[a] * u[c];
+            let id = if a == c { 1.0 } else { 0.0 };
+            b[a][c] = k * (t * (id - uu) + uu);
+        }
+    }
+    b
+}
+
+/// Adds spring block `b` of `(i, j)`: `b` at both diagonal blocks, `−b` between them.
+#[inline]
+fn scatter(h: &mut BlockHessian, i: usize, j: usize, b: &super::Block) {
+    h.add(i, i, b);
+    h.add(j, j, b);
+    h.add(i, j, &b.map(|row| row.map(|v| -v)));
 }
 
 impl EnergyTerm for SpringTerm {
@@ -180,11 +200,12 @@ impl EnergyTerm for SpringTerm {
         let projected = kind == HessianKind::Projected;
         for (q, s) in self.set.springs().iter().enumerate() {
             let (i, j) = (s.i as usize, s.j as usize);
-            let b = spring_block(diff(x, i, j), rest[q], k[q], projected);
-            h.add(i, i, &b);
-            h.add(j, j, &b);
-            let neg = b.map(|row| row.map(|v| -v));
-            h.add(i, j, &neg);
+            scatter(
+                h,
+                i,
+                j,
+                &spring_block(diff(x, i, j), rest[q], k[q], projected),
+            );
         }
     }
 
@@ -199,14 +220,9 @@ impl EnergyTerm for SpringTerm {
         let (rest, k) = p.values.split_at(m);
         for (q, s) in self.set.springs().iter().enumerate() {
             let (i, j) = (s.i as usize, s.j as usize);
-            let d = diff(x, i, j);
-            let (bp, be) = spring_blocks(d, rest[q], k[q]);
-            for (h, b) in [(&mut *projected, bp), (&mut *exact, be)] {
-                h.add(i, i, &b);
-                h.add(j, j, &b);
-                let neg = b.map(|row| row.map(|v| -v));
-                h.add(i, j, &neg);
-            }
+            let (bp, be) = spring_blocks(diff(x, i, j), rest[q], k[q]);
+            scatter(projected, i, j, &bp);
+            scatter(exact, i, j, &be);
         }
     }
 }
