@@ -204,7 +204,10 @@ impl PyPhysicalBlend {
     /// `fixed`: `"auto"` (default: vertices that move in no shape), `"none"`, or vertex ids
     /// (interpolated linearly). `hinge_weight` (default 0.01, 0 turns the bending term off),
     /// `kinematic_stretch` (default 10), `gradient_tolerance` (default 1e-6),
-    /// `max_newton_iterations` (default 300): see the library's `BlendOptions`.
+    /// `max_newton_iterations` (default 300), `sampled_start` (default True: frames start
+    /// from the predictor corrected by each target's equilibria at ¼, ½, ¾, solved once per
+    /// target on first need; False saves those three solves when only a frame or two is
+    /// wanted): see the library's `BlendOptions`.
     /// `interior="lattice"` adds internal springs on a lattice inside each closed component
     /// (Sec. 3.1; `"lattice,2"` doubles its density, `"tetgen[,density]"` runs an external
     /// tetgen); `anchor="auto"` (or `"x,y,z[,size]"`) adds the rigid interior anchor
@@ -213,7 +216,7 @@ impl PyPhysicalBlend {
     #[new]
     #[pyo3(signature = (base, targets, faces, *, fixed=None, hinge_weight=None,
         kinematic_stretch=None, gradient_tolerance=None, max_newton_iterations=None,
-        interior=None, anchor=None))]
+        sampled_start=true, interior=None, anchor=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -225,6 +228,7 @@ impl PyPhysicalBlend {
         kinematic_stretch: Option<f64>,
         gradient_tolerance: Option<f64>,
         max_newton_iterations: Option<usize>,
+        sampled_start: bool,
         interior: Option<&str>,
         anchor: Option<&str>,
     ) -> PyResult<Self> {
@@ -232,6 +236,7 @@ impl PyPhysicalBlend {
         let (n, k) = (shapes.num_vertices(), shapes.len() - 1);
         let mut opts = BlendOptions {
             fixed: fixed_vertices(fixed)?,
+            sampled_start,
             ..BlendOptions::default()
         };
         if let Some(w) = hinge_weight {
@@ -340,8 +345,9 @@ impl PyPhysicalBlend {
         Ok(to_array3(py, &frames, self.vertices))
     }
 
-    /// The shape the solve for `weights` starts from (see :class:`Predictor`), as a new
-    /// `(n, 3)` array: a preview in milliseconds, not the equilibrium.
+    /// The predictor the solve for `weights` starts from, before the sampled correction (see
+    /// :class:`Predictor`), as a new `(n, 3)` array: a preview in milliseconds, not the
+    /// equilibrium.
     #[pyo3(signature = (weights, *, convex=false))]
     fn predict<'py>(
         &self,

@@ -50,7 +50,7 @@ def test_stats_and_summary(rig):
     V, B, F = rig
     b = morphkit.PhysicalBlend(V, [B], F)
     assert b.last_stats is None
-    b.solve(0.5)
+    b.solve(0.4)  # not a sample weight of the sampled start (there it starts converged)
     s = b.last_stats
     assert s["converged"] and s["gradient_norm"] <= s["gradient_tolerance"]
     assert s["newton_iterations"] >= 1
@@ -172,15 +172,15 @@ def test_predictor_previews_while_the_blend_solves(rig):
     assert np.abs(preview.predict(0.0) - V).max() <= 1e-12 * d
     assert np.abs(b.predict([0.0, 1.0], convex=True) - B).max() <= 1e-12 * d
     solved = {}
-    t = threading.Thread(target=lambda: solved.setdefault("x", b.solve(0.5)))
+    t = threading.Thread(target=lambda: solved.setdefault("x", b.solve(0.4)))
     t.start()
-    previews = [preview.predict(a) for a in (0.1, 0.3, 0.5)]  # while the solve runs
+    previews = [preview.predict(a) for a in (0.1, 0.3, 0.4)]  # while the solve runs
     t.join()
     x = solved["x"]
     assert b.last_stats["newton_iterations"] > 0
-    lin = 0.5 * (V + B)
+    lin = 0.6 * V + 0.4 * B
     assert np.abs(previews[2] - x).max() < 0.5 * np.abs(lin - x).max()
-    assert np.array_equal(previews[2], preview.predict(0.5))
+    assert np.array_equal(previews[2], preview.predict(0.4))
     with pytest.raises(morphkit.BlendError, match="weight"):
         preview.predict([0.5, 0.5])
 
@@ -222,3 +222,18 @@ def test_tetgen_interior():
     half = b.solve(0.5)
     assert b.last_stats["converged"]
     assert 0.9 < morphkit.metrics(V, half, F)["volume_ratio"] < 1.1
+
+
+def test_sampled_start_agrees_with_the_plain_start(rig):
+    V, B, F = rig
+    d = diag(V)
+    sampled = morphkit.PhysicalBlend(V, [B], F)
+    plain = morphkit.PhysicalBlend(V, [B], F, sampled_start=False)
+    for a in (0.3, 0.5, 0.8):
+        x, y = sampled.solve(a), plain.solve(a)
+        assert sampled.last_stats["converged"] and plain.last_stats["converged"]
+        assert np.abs(x - y).max() <= 1e-5 * d, a
+        if a == 0.5:
+            # At a sample weight the sampled start is that sample's equilibrium.
+            assert sampled.last_stats["newton_iterations"] == 0
+            assert plain.last_stats["newton_iterations"] >= 1

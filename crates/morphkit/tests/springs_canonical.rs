@@ -162,13 +162,19 @@ fn the_predictor_previews_the_solve_and_runs_beside_it() {
         let p = solver.predict(&Weights::Alpha(a)).unwrap();
         assert!(max_dist(&p, s.positions(shape)) <= 1e-12 * d, "alpha {a}");
     }
-    let w = Weights::Alpha(0.5);
+    // Not a sample weight of the sampled start (there the start is the equilibrium).
+    let w = Weights::Alpha(0.4);
     let (solved, previewed) = std::thread::scope(|scope| {
         let h = scope.spawn(|| solver.solve(&w).unwrap());
         let p = preview.predict(&w).unwrap();
         (h.join().unwrap(), p)
     });
     assert!(solved.stats.converged && solved.stats.newton_iterations > 0);
+    assert_eq!(
+        solver.start_samples_solved(),
+        2,
+        "the ¼ and ½ samples, once"
+    );
     let lin = linear_blend(&s, &w).unwrap();
     let to_eq = max_dist(&previewed, &solved.positions);
     let lin_to_eq = max_dist(&lin, &solved.positions);

@@ -36,6 +36,17 @@ pub struct BenchArgs {
     /// Threads solving frames in parallel (frames are independent; results do not change).
     #[arg(long, default_value_t = 1)]
     threads: usize,
+    /// Springs suite: start frames from the plain predictor (as `blend --no-sampled-start`),
+    /// to compare with the default sampled start.
+    #[arg(long)]
+    no_sampled_start: bool,
+}
+
+/// How the springs suite runs each sequence.
+struct Sequence {
+    steps: usize,
+    threads: usize,
+    options: BlendOptions,
 }
 
 /// Most `--steps`: 36 steps of every mesh take about a minute.
@@ -52,11 +63,11 @@ fn peak_rss_mib() -> Option<f64> {
 fn time_sequence(
     name: &str,
     shapes: &ShapeSet,
-    steps: usize,
-    threads: usize,
+    seq: &Sequence,
 ) -> anyhow::Result<serde_json::Value> {
+    let (steps, threads) = (seq.steps, seq.threads);
     let t0 = Instant::now();
-    let mut solver = PhysicalBlend::new(shapes, &BlendOptions::default())?;
+    let mut solver = PhysicalBlend::new(shapes, &seq.options)?;
     let setup = t0.elapsed().as_secs_f64();
     let mut iters = 0;
     let mut facts = 0;
@@ -82,6 +93,7 @@ fn time_sequence(
         all_converged &= r.stats.converged;
     }
     let per_step = t1.elapsed().as_secs_f64() / steps as f64;
+    let samples = solver.start_samples_solved();
     let row = json!({
         "mesh": name,
         "vertices": shapes.num_vertices(),
@@ -93,13 +105,14 @@ fn time_sequence(
         "newton_iterations_per_step": iters as f64 / steps as f64,
         "factorizations_per_step": facts as f64 / steps as f64,
         "cg_iterations_per_step": cgs as f64 / steps as f64,
+        "start_sample_solves": samples,
         "all_converged": all_converged,
         "worst_gradient_over_tolerance": worst_grad,
         "peak_rss_mib": peak_rss_mib(),
         "threads": threads,
     });
     println!(
-        "{:<28} {:>7} {:>8} {:>9.1} {:>10.2} {:>7.2} {:>7.2} {:>7.1} {:>9}",
+        "{:<28} {:>7} {:>8} {:>9.1} {:>10.2} {:>7.2} {:>7.2} {:>7.1} {:>7} {:>9}",
         name,
         shapes.num_vertices(),
         solver.summary().springs,
@@ -108,6 +121,7 @@ fn time_sequence(
         iters as f64 / steps as f64,
         facts as f64 / steps as f64,
         cgs as f64 / steps as f64,
+        samples,
         peak_rss_mib()
             .map(|m| format!("{m:.0}"))
             .unwrap_or_else(|| "-".into())
@@ -131,24 +145,30 @@ fn bent_tube(target: usize) -> ShapeSet {
     .expect("generated shapes share connectivity")
 }
 
-fn springs_suite(
-    data: Option<&Path>,
-    steps: usize,
-    threads: usize,
-) -> anyhow::Result<Vec<serde_json::Value>> {
-    println!("physical blend, {steps} steps of α in [0, 1], default options (tolerance 1e-6 · k0), {threads} thread(s)");
+fn springs_suite(data: Option<&Path>, seq: &Sequence) -> anyhow::Result<Vec<serde_json::Value>> {
+    let (steps, threads) = (seq.steps, seq.threads);
+    let start = if seq.options.sampled_start {
+        "sampled start; ms/step includes its sample solves (column samples; their iterations are not in newton/factor/cg)"
+    } else {
+        "plain predictor start (--no-sampled-start)"
+    };
+    println!("physical blend, {steps} steps of α in [0, 1], default options (tolerance 1e-6 · k0), {threads} thread(s), {start}");
     println!(
-        "{:<28} {:>7} {:>8} {:>9} {:>10} {:>7} {:>7} {:>7} {:>9}",
-        "mesh", "verts", "springs", "setup ms", "ms/step", "newton", "factor", "cg", "peak MiB"
+        "{:<28} {:>7} {:>8} {:>9} {:>10} {:>7} {:>7} {:>7} {:>7} {:>9}",
+        "mesh",
+        "verts",
+        "springs",
+        "setup ms",
+        "ms/step",
+        "newton",
+        "factor",
+        "cg",
+        "samples",
+        "peak MiB"
     );
     let mut rows = Vec::new();
     for n in [2_200, 8_500, 18_600] {
-        rows.push(time_sequence(
-            &format!("tube-{n}"),
-            &bent_tube(n),
-            steps,
-            threads,
-        )?);
+        rows.push(time_sequence(&format!("tube-{n}"), &bent_tube(n), seq)?);
     }
     if let Some(dir) = data {
         let horse = [
@@ -156,18 +176,13 @@ fn springs_suite(
             dir.join("sumner-horse-camel/horse-05.obj.gz"),
         ];
         let set = morphkit::io::read_shape_set(&horse)?;
-        rows.push(time_sequence("horse ref↔05 (8.4k)", &set, steps, threads)?);
+        rows.push(time_sequence("horse ref↔05 (8.4k)", &set, seq)?);
         let ict = [
             dir.join("ict-facekit/generic_neutral_mesh.obj.gz"),
             dir.join("ict-facekit/jawOpen.obj.gz"),
         ];
         let set = morphkit::io::read_shape_set(&ict)?;
-        rows.push(time_sequence(
-            "ICT head↔jawOpen (26.7k)",
-            &set,
-            steps,
-            threads,
-        )?);
+        rows.push(time_sequence("ICT head↔jawOpen (26.7k)", &set, seq)?);
         let arm = morphkit::io::read_mesh(&dir.join("generic-meshes/armadillo.obj.gz"))?;
         let (lo, hi) = arm.bounding_box();
         let mid = 0.5 * (lo[0] + hi[0]);
@@ -179,12 +194,7 @@ fn springs_suite(
                 ("bent".into(), bent),
             ],
         )?;
-        rows.push(time_sequence(
-            "armadillo bent 60° (14.6k)",
-            &set,
-            steps,
-            threads,
-        )?);
+        rows.push(time_sequence("armadillo bent 60° (14.6k)", &set, seq)?);
     }
     Ok(rows)
 }
@@ -203,8 +213,11 @@ fn memory_suite() -> anyhow::Result<serde_json::Value> {
             vec![("flat".into(), m.positions.clone()), ("bent".into(), bent)],
         )?;
         let t = Instant::now();
+        // Two iterations of one frame; the sampled start's fields (72 bytes per vertex and
+        // target, in the prediction) would add two unconverged sample solves first.
         let opts = BlendOptions {
             max_newton_iterations: 2,
+            sampled_start: false,
             ..Default::default()
         };
         let row = match PhysicalBlend::new(&set, &opts) {
@@ -252,7 +265,15 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         .check()?;
     let mut report = json!({ "threads": args.threads });
     if matches!(args.suite.as_str(), "springs" | "all") {
-        report["springs"] = json!(springs_suite(data.as_deref(), args.steps, args.threads)?);
+        let seq = Sequence {
+            steps: args.steps,
+            threads: args.threads,
+            options: BlendOptions {
+                sampled_start: !args.no_sampled_start,
+                ..Default::default()
+            },
+        };
+        report["springs"] = json!(springs_suite(data.as_deref(), &seq)?);
     }
     if matches!(args.suite.as_str(), "volume") {
         report["volume"] = super::bench_volume::run_volume_bench(args.steps, args.threads)?;

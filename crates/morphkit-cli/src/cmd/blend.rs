@@ -107,6 +107,12 @@ pub struct BlendArgs {
     /// keep). A speed knob; results agree within the tolerance.
     #[arg(long, default_value_t = 8)]
     pub keep_factor_cg: usize,
+    /// Start every frame from the plain predictor instead of the predictor corrected by each
+    /// target's equilibria at α = ¼, ½, ¾ (three extra solves per target, done once): cheaper
+    /// for one or two frames, slower for an animation. The frames agree within the tolerance
+    /// where both starts reach the same equilibrium.
+    #[arg(long)]
+    pub no_sampled_start: bool,
     /// Arithmetic of the Newton preconditioner's factor: `single` (half the memory, faster;
     /// the equilibrium is the same to the gradient tolerance) or `double`.
     #[arg(long, default_value = "single", value_parser = ["single", "double"])]
@@ -307,6 +313,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         kinematic_stretch: a.kinematic_stretch,
         refactor_every: a.refactor_every,
         keep_factor_cg: a.keep_factor_cg,
+        sampled_start: !a.no_sampled_start,
         factor_precision: if a.factor_precision == "double" {
             Precision::Double
         } else {

@@ -4,8 +4,11 @@
 
 use super::constraints::{stretched_vertices, Components, Constraints};
 use super::newton::{projected_newton, trust_region, Problem, Workspace};
-use super::options::{BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary};
+use super::options::{
+    check_options, BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary,
+};
 use super::rotation_predictor::RotationPredictor;
+use super::sampled_start::{Sampler, StartSamples};
 use super::system::{expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem};
 use super::terms::{
     BlockHessian, BlockPattern, EnergyTerm, Held, HingeTerm, PointTarget, PointTerm, SpringTerm,
@@ -14,7 +17,7 @@ use super::terms::{
 use super::{
     predictor, BlendError, FillOrdering, Predictor, SpringKind, SpringSet, StiffnessRule, Weights,
 };
-use crate::mesh::{validate, ShapeSet, Topology};
+use crate::mesh::{validate, Point, ShapeSet, Topology};
 use crate::sparse::Ordering;
 use std::sync::Arc;
 use std::time::Instant;
@@ -23,8 +26,8 @@ use std::time::Instant;
 /// vectors as needed (a slider, an animation). Each solve is the canonical equilibrium of its
 /// weights (see the [module docs](super)): it never depends on earlier solves.
 pub struct PhysicalBlend {
-    rig: Arc<Rig>,
-    ws: Workspace,
+    pub(super) rig: Arc<Rig>,
+    pub(super) ws: Workspace,
 }
 
 /// The predictor $P(w)$ of a [`PhysicalBlend`] on its own (see [`PhysicalBlend::predictor`]):
@@ -52,9 +55,11 @@ impl BlendPredictor {
     pub fn num_shapes(&self) -> usize {
         self.rig.shapes.len()
     }
-    /// The shape every solve for `weights` starts from, in world coordinates (`#V`): the
-    /// rotation-aware interpolation of the shapes (the linear blend with
-    /// [`Predictor::Linear`]), with fixed and kinematic vertices at their linear blend. It
+    /// The predictor $P(w)$, in world coordinates (`#V`): the rotation-aware interpolation of
+    /// the shapes (the linear blend with [`Predictor::Linear`]), with fixed and kinematic
+    /// vertices at their linear blend; a solve starts from it plus the
+    /// [sampled correction](super::sampled_start), which needs equilibria and so is not part
+    /// of this preview. It
     /// equals each shape exactly at its one-hot weights and costs one prefactored solve, so it
     /// can follow a slider while the equilibrium is computed (a preview, not the equilibrium).
     pub fn predict(&self, weights: &Weights) -> Result<Vec<crate::mesh::Point>, BlendError> {
@@ -66,12 +71,12 @@ impl BlendPredictor {
 }
 
 /// Everything that does not change between solves (shared by all threads).
-struct Rig {
-    shapes: ShapeSet,
+pub(super) struct Rig {
+    pub(super) shapes: ShapeSet,
     terms: Vec<Box<dyn EnergyTerm>>,
-    constraints: Constraints,
+    pub(super) constraints: Constraints,
     system: FreeSystem,
-    options: BlendOptions,
+    pub(super) options: BlendOptions,
     tolerance: f64,
     /// Mean structure-spring stiffness on the base (the unit of point-target stiffness).
     mean_stiffness: f64,
@@ -79,6 +84,8 @@ struct Rig {
     rotation: Option<RotationPredictor>,
     /// Per vertex: held by a boundary condition.
     is_fixed: Vec<bool>,
+    /// Each target's correction fields of the sampled start.
+    pub(super) samples: StartSamples,
     summary: RigSummary,
 }
 
@@ -88,50 +95,6 @@ impl std::fmt::Debug for PhysicalBlend {
             .field("summary", &self.rig.summary)
             .finish()
     }
-}
-
-fn check_options(o: &BlendOptions) -> Result<(), BlendError> {
-    let bad = |name: &str, why: &str, v: f64| {
-        Err(BlendError::InvalidOption(format!(
-            "{name} must be {why}, got {v:e}"
-        )))
-    };
-    let finite_pos = |v: f64| v.is_finite() && v > 0.0;
-    if !finite_pos(o.gradient_tolerance) {
-        return bad(
-            "the gradient tolerance",
-            "finite and positive",
-            o.gradient_tolerance,
-        );
-    }
-    if !finite_pos(o.springs.k0) {
-        return bad("k0", "finite and positive", o.springs.k0);
-    }
-    if !(o.springs.bending_scale.is_finite() && o.springs.bending_scale >= 0.0) {
-        return bad(
-            "the bending scale",
-            "finite and non-negative",
-            o.springs.bending_scale,
-        );
-    }
-    if !(o.hinges.weight.is_finite() && o.hinges.weight >= 0.0) {
-        return bad(
-            "the hinge weight",
-            "finite and non-negative",
-            o.hinges.weight,
-        );
-    }
-    if !(o.min_rest_fraction > 0.0 && o.min_rest_fraction < 1.0) {
-        return bad("min_rest_fraction", "in (0, 1)", o.min_rest_fraction);
-    }
-    if o.kinematic_stretch.is_nan() || o.kinematic_stretch <= 1.0 {
-        return bad(
-            "the kinematic stretch",
-            "greater than 1 (or infinite)",
-            o.kinematic_stretch,
-        );
-    }
-    Ok(())
 }
 
 /// Refuses shapes in which no structure spring has positive length (all vertices coincide).
@@ -245,7 +208,8 @@ impl PhysicalBlend {
             FillOrdering::Amd => None,
         };
         summary.predicted_bytes =
-            predicted_bytes(&block_pattern, vertex_order.as_deref(), o.factor_precision)?;
+            predicted_bytes(&block_pattern, vertex_order.as_deref(), o.factor_precision)?
+                + StartSamples::bytes(n, shapes.len() - 1, o.sampled_start);
         if summary.predicted_bytes > o.max_memory_bytes {
             return Err(BlendError::TooLarge {
                 vertices: n,
@@ -282,6 +246,7 @@ impl PhysicalBlend {
                 mean_stiffness: ksum / count,
                 rotation,
                 is_fixed,
+                samples: StartSamples::new(shapes.len() - 1),
                 summary,
             }),
             ws,
@@ -317,8 +282,8 @@ impl PhysicalBlend {
         self.rig.tolerance
     }
 
-    /// The predictor $P(w)$ that the solve for `weights` starts from (see
-    /// [`BlendPredictor::predict`]).
+    /// The predictor $P(w)$ that the solve for `weights` starts from, before the sampled
+    /// correction (see [`BlendPredictor::predict`]).
     pub fn predict(&self, weights: &Weights) -> Result<Vec<crate::mesh::Point>, BlendError> {
         self.predictor().predict(weights)
     }
@@ -337,7 +302,7 @@ impl PhysicalBlend {
     /// best state found, with `stats.converged == false` and the failing vertices in
     /// `stats.unconverged_vertices`; it never returns NaNs.
     pub fn solve(&mut self, weights: &Weights) -> Result<BlendResult, BlendError> {
-        self.rig.solve(&mut self.ws, weights, &[], None)
+        self.frame_solver().solve_with(weights, &[], None)
     }
 
     /// The equilibrium for `weights` with vertices pulled towards point targets (pulled
@@ -363,6 +328,7 @@ impl PhysicalBlend {
         weights: &[Weights],
         threads: usize,
     ) -> Vec<Result<BlendResult, BlendError>> {
+        self.prepare(weights, threads);
         report_lost(self.map_frames(weights, threads, |s, w| s.solve_with(w, &[], None)))
     }
 
@@ -452,8 +418,8 @@ pub(crate) fn report_lost<R, E: From<BlendError>>(
 /// One thread's view of a [`PhysicalBlend`]: the shared rig and that thread's numeric
 /// workspace. Its solves are those of the blend, bit for bit.
 pub struct FrameSolver<'a> {
-    rig: &'a Rig,
-    ws: &'a mut Workspace,
+    pub(super) rig: &'a Rig,
+    pub(super) ws: &'a mut Workspace,
 }
 
 impl FrameSolver<'_> {
@@ -464,14 +430,19 @@ impl FrameSolver<'_> {
         targets: &[PointTarget],
         start: Option<&[crate::mesh::Point]>,
     ) -> Result<BlendResult, BlendError> {
-        self.rig.solve(self.ws, weights, targets, start)
+        let c = weights.coefficients(self.rig.shapes.len())?;
+        let from = match start {
+            Some(p) => Start::From(p),
+            None => Start::Canonical,
+        };
+        self.rig.solve(self.ws, &c, targets, from)
     }
 }
 
 impl Rig {
     /// Where a solve starts, in solver coordinates: `start_from` (with fixed vertices at
     /// their linear blend) when given, else the predictor $P(c)$.
-    fn start(
+    pub(super) fn start(
         &self,
         c: &[f64],
         lin: &[crate::mesh::Point],
@@ -523,16 +494,34 @@ impl Rig {
         Ok(())
     }
 
-    fn solve(
+    pub(super) fn solve(
         &self,
         ws: &mut Workspace,
-        weights: &Weights,
+        c: &[f64],
         targets: &[PointTarget],
-        start_from: Option<&[crate::mesh::Point]>,
+        from: Start<'_>,
     ) -> Result<BlendResult, BlendError> {
         let start = Instant::now();
-        let c = weights.coefficients(self.shapes.len())?;
         self.check_targets(targets)?;
+        let corrected;
+        let start_from = match from {
+            Start::From(p) => Some(p),
+            Start::Plain => None,
+            Start::Canonical if !self.options.sampled_start => None,
+            Start::Canonical => {
+                let correction = self.samples.correction(c, &mut Sampler { rig: self, ws });
+                corrected = correction.map(|d| {
+                    let mut p = self.predicted(c);
+                    for (p, d) in p.iter_mut().zip(&d) {
+                        for k in 0..3 {
+                            p[k] += d[k];
+                        }
+                    }
+                    p
+                });
+                corrected.as_deref()
+            }
+        };
         if start_from.is_some_and(|p| p.len() != self.shapes.num_vertices()) {
             return Err(BlendError::InvalidOption(
                 "the start positions must have one point per vertex".into(),
@@ -547,13 +536,13 @@ impl Rig {
             scale: self.mean_stiffness,
         };
         let mut terms: Vec<&dyn EnergyTerm> = self.terms.iter().map(|t| t.as_ref()).collect();
-        let mut params: Vec<TermParameters> = self.terms.iter().map(|t| t.prepare(&c)).collect();
+        let mut params: Vec<TermParameters> = self.terms.iter().map(|t| t.prepare(c)).collect();
         if !soft.is_empty() {
             terms.push(&points);
             params.push(TermParameters::default());
         }
-        let lin = predictor::linear(&self.shapes, &c);
-        let mut x = self.start(&c, &lin, start_from);
+        let lin = predictor::linear(&self.shapes, c);
+        let mut x = self.start(c, &lin, start_from);
         let mut stats = FrameStats {
             gradient_tolerance: self.tolerance,
             clamped_springs: params.iter().map(|p| p.clamped).sum(),
@@ -579,6 +568,17 @@ impl Rig {
         stats.seconds = start.elapsed().as_secs_f64();
         Ok(BlendResult { positions, stats })
     }
+}
+
+/// Where a solve starts.
+#[derive(Clone, Copy)]
+pub(super) enum Start<'a> {
+    /// The canonical start: the predictor, with the sampled correction when asked for.
+    Canonical,
+    /// The predictor alone (the sampled start's own samples).
+    Plain,
+    /// Given world positions (`#V`).
+    From(&'a [Point]),
 }
 
 /// One-shot physical blend: builds a [`PhysicalBlend`] and solves once.

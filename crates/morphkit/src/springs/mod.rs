@@ -22,17 +22,21 @@
 //!
 //! > $x^*(w)$ = the minimiser reached by the deterministic trust-region Newton iteration of
 //! > [`newton`](self) (fixed budgets, schedules and tolerances, no timing) started from the
-//! > predictor $P(w)$: Poisson interpolation of the shapes' deformation gradients with
-//! > rotations blended in the log map ([`Predictor::RotationAware`], Xu et al. 2005), placed
-//! > rigidly on the fixed vertices or the linear blend $\sum_s c_s x^s$
-//! > ([`Predictor::Linear`] uses that blend directly), then each gauged component aligned
-//! > rigidly to the linear blend.
+//! > start $\tilde P(w) = P(w) + \sum_{s \ge 1} q_s(c_s)$. The predictor $P(w)$ is the Poisson
+//! > interpolation of the shapes' deformation gradients with rotations blended in the log map
+//! > ([`Predictor::RotationAware`], Xu et al. 2005), placed rigidly on the fixed vertices or
+//! > the linear blend $\sum_s c_s x^s$ ([`Predictor::Linear`] uses that blend directly), then
+//! > each gauged component aligned rigidly to the linear blend. The *sampled correction*
+//! > $q_s$ ([`sampled_start`], [`BlendOptions::sampled_start`]) interpolates how far target
+//! > $s$'s own equilibria at $a = ¼, ½, ¾$ lie from $P$ (solved once per rig, ½ from $P$, ¼ and
+//! > ¾ from $P$ plus the ½ sample's correction); it is zero at $c_s \in \{0, 1\}$.
 //!
 //! Consequences, each tested:
 //! - **Endpoints are exact.** At one-hot weights $P = x^s$, where every term has zero energy and
 //!   gradient: the solve takes zero iterations and returns shape $s$ (within round-off).
 //! - **A frame is a function of its weights alone.** No solve starts from, or reuses numbers of,
-//!   an earlier solve (the symbolic analysis and buffers are reused, never values), so frame
+//!   an earlier frame (the symbolic analysis and buffers are reused, never values; the sampled
+//!   correction's samples are solved the same way whichever frame first needs them), so frame
 //!   order, scrubbing back and forth, threads ([`PhysicalBlend::solve_many`]) and machine load
 //!   do not change a bit of the result (buffers are 64-byte aligned, METIS orderings are
 //!   computed one at a time; the tests compare frames for equality). `--alpha a` equals the matching frame of `--frames`.
@@ -62,6 +66,7 @@ mod newton;
 mod options;
 mod predictor;
 mod rotation_predictor;
+pub mod sampled_start;
 mod spring_set;
 mod steihaug;
 mod system;

@@ -1,4 +1,5 @@
-//! The predictor $P(w)$ that every solve starts from, and the output alignment.
+//! The predictor $P(w)$ that every solve starts from (with the sampled correction of
+//! [`sampled_start`](super::sampled_start) added), and the output alignment.
 //!
 //! $P(w)$ is the linear blend $L(c) = \sum_s c_s x^s$ of the shapes, expressed in solver
 //! coordinates: a component held by a rigid [`Gauge`](super::Gauge) is rotated into the frame

@@ -1,0 +1,132 @@
+//! The sampled start (`BlendOptions::sampled_start`): frames start from the predictor
+//! corrected by each target's equilibria at ¼, ½, ¾. It must reach the equilibrium the plain
+//! predictor reaches (within the tolerance), with fewer iterations, and stay a function of the
+//! weights alone: samples computed lazily by one solve or in parallel by `solve_many` give the
+//! same bits.
+
+mod common;
+
+use morphkit::mesh::{bbox_diagonal, generate, Point, ShapeSet};
+use morphkit::springs::{BlendOptions, PhysicalBlend, Weights};
+
+fn max_dist(a: &[Point], b: &[Point]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| {
+            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+        })
+        .fold(0.0, f64::max)
+}
+
+fn options(sampled_start: bool) -> BlendOptions {
+    BlendOptions {
+        sampled_start,
+        ..Default::default()
+    }
+}
+
+/// A free (gauged) bar bent by 150° over its second half, and twisted by 90° as a second
+/// target.
+fn bar_rig() -> ShapeSet {
+    let m = generate::bar(4.0, 0.6, 2, 24);
+    let bent = generate::bend(&m.positions, 2.0, 2.0, 150f64.to_radians());
+    let twisted: Vec<Point> = m
+        .positions
+        .iter()
+        .map(|p| {
+            let t = (p[0] / 4.0).clamp(0.0, 1.0) * std::f64::consts::FRAC_PI_2;
+            let (s, c) = t.sin_cos();
+            [p[0], c * p[1] - s * p[2], s * p[1] + c * p[2]]
+        })
+        .collect();
+    ShapeSet::new(
+        m.clone(),
+        vec![
+            ("straight".into(), m.positions.clone()),
+            ("bent".into(), bent),
+            ("twisted".into(), twisted),
+        ],
+    )
+    .unwrap()
+}
+
+#[test]
+fn reaches_the_plain_equilibrium_with_fewer_iterations() {
+    let s = bar_rig();
+    let d = bbox_diagonal(s.positions(0));
+    let mut sampled = PhysicalBlend::new(&s, &options(true)).unwrap();
+    let mut plain = PhysicalBlend::new(&s, &options(false)).unwrap();
+    let (mut n_sampled, mut n_plain) = (0, 0);
+    for k in 1..11 {
+        let w = Weights::Delta(vec![k as f64 / 11.0, 0.0]);
+        let a = sampled.solve(&w).unwrap();
+        let b = plain.solve(&w).unwrap();
+        assert!(a.stats.converged && b.stats.converged, "frame {k}");
+        // Two solves converged to the gradient tolerance (1e-6 · k0) from different starts
+        // differ by up to that residual over the softest mode's stiffness: about 1e-6 of
+        // the diagonal on this free bar (a different basin would be a large part of it).
+        let gap = max_dist(&a.positions, &b.positions);
+        assert!(gap <= 1e-5 * d, "frame {k}: {gap:e} of {d}");
+        n_sampled += a.stats.newton_iterations;
+        n_plain += b.stats.newton_iterations;
+    }
+    eprintln!("Newton iterations over 10 frames: sampled {n_sampled}, plain {n_plain}");
+    assert!(n_sampled < n_plain, "{n_sampled} vs {n_plain}");
+    // Only the bent target's ¼, ½ and ¾ samples were solved.
+    assert_eq!(sampled.start_samples_solved(), 3);
+    assert_eq!(plain.start_samples_solved(), 0);
+    // At a sample weight the start is that sample's equilibrium: no iteration left.
+    let half = sampled.solve(&Weights::Delta(vec![0.5, 0.0])).unwrap();
+    assert!(half.stats.converged && half.stats.newton_iterations == 0);
+}
+
+#[test]
+fn lazy_and_prepared_samples_give_the_same_bits() {
+    let s = bar_rig();
+    let weights: Vec<Weights> = [(0.1, 0.0), (0.6, 0.3), (0.0, 0.9), (0.35, 0.35)]
+        .iter()
+        .map(|&(a, b)| Weights::Delta(vec![a, b]))
+        .collect();
+    // Prepared in parallel by solve_many.
+    let mut many = PhysicalBlend::new(&s, &options(true)).unwrap();
+    let frames: Vec<Vec<Point>> = many
+        .solve_many(&weights, 2)
+        .into_iter()
+        .map(|r| r.unwrap().positions)
+        .collect();
+    // Computed lazily, in reverse order, each by the first solve that needs it.
+    let mut one = PhysicalBlend::new(&s, &options(true)).unwrap();
+    for (k, w) in weights.iter().enumerate().rev() {
+        let r = one.solve(w).unwrap();
+        assert!(r.stats.converged, "frame {k}");
+        common::assert_same_frame(&r.positions, &frames[k], &format!("frame {k}"));
+    }
+    assert_eq!(many.start_samples_solved(), one.start_samples_solved());
+    assert_eq!(
+        many.start_samples_solved(),
+        6,
+        "both targets' three samples"
+    );
+}
+
+/// A sample that does not converge turns its target's correction off: the frame starts from
+/// the plain predictor, bit for bit the solve without the sampled start.
+#[test]
+fn unconverged_samples_leave_the_plain_start() {
+    let s = bar_rig();
+    let limited = |sampled_start| BlendOptions {
+        sampled_start,
+        max_newton_iterations: 1,
+        ..Default::default()
+    };
+    let w = Weights::Delta(vec![0.4, 0.0]);
+    let mut a = PhysicalBlend::new(&s, &limited(true)).unwrap();
+    let mut b = PhysicalBlend::new(&s, &limited(false)).unwrap();
+    let (ra, rb) = (a.solve(&w).unwrap(), b.solve(&w).unwrap());
+    assert!(
+        !ra.stats.converged,
+        "one iteration cannot converge this bend"
+    );
+    assert!(a.start_samples_solved() >= 1);
+    common::assert_same_frame(&ra.positions, &rb.positions, "unconverged samples");
+}
