@@ -23,14 +23,7 @@ const ICT: [&str; 10] = [
     "mouthSmile_R",
 ];
 
-fn max_dist(a: &[Point], b: &[Point]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| {
-            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-        })
-        .fold(0.0, f64::max)
-}
+use common::max_dist;
 
 /// Every one-hot delta weight vector (and all zeros) reproduces its shape within 1e-6 × diag.
 fn check_endpoints(name: &str, solver: &mut PhysicalBlend) {

@@ -9,14 +9,7 @@ mod common;
 use morphkit::mesh::{bbox_diagonal, generate, Point, ShapeSet};
 use morphkit::springs::{BlendOptions, PhysicalBlend, Weights};
 
-fn max_dist(a: &[Point], b: &[Point]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| {
-            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-        })
-        .fold(0.0, f64::max)
-}
+use common::max_dist;
 
 fn options(sampled_start: bool) -> BlendOptions {
     BlendOptions {

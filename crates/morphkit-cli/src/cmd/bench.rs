@@ -36,8 +36,8 @@ pub struct BenchArgs {
     /// Threads solving frames in parallel (frames are independent; results do not change).
     #[arg(long, default_value_t = 1)]
     threads: usize,
-    /// Springs suite: start frames from the plain predictor (as `blend --no-sampled-start`),
-    /// to compare with the default sampled start.
+    /// Springs, volume and scene suites: start frames from the plain predictor (as `blend
+    /// --no-sampled-start`), to compare with the default sampled start.
     #[arg(long)]
     no_sampled_start: bool,
 }
@@ -276,13 +276,18 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         report["springs"] = json!(springs_suite(data.as_deref(), &seq)?);
     }
     if matches!(args.suite.as_str(), "volume") {
-        report["volume"] = super::bench_volume::run_volume_bench(args.steps, args.threads)?;
+        report["volume"] = super::bench_volume::run_volume_bench(
+            args.steps,
+            args.threads,
+            !args.no_sampled_start,
+        )?;
     }
     if matches!(args.suite.as_str(), "memory") {
         report["memory"] = memory_suite()?;
     }
     if matches!(args.suite.as_str(), "scene") {
-        report["scene"] = super::bench_scene::run_scene_bench(&bent_tube(18_000), 3)?;
+        report["scene"] =
+            super::bench_scene::run_scene_bench(&bent_tube(18_000), 3, !args.no_sampled_start)?;
     }
     if matches!(args.suite.as_str(), "transfer" | "all") {
         match data.as_deref() {

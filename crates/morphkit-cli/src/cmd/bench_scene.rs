@@ -41,8 +41,15 @@ fn pressing_ball(shapes: &ShapeSet, free: &[Point]) -> anyhow::Result<Obstacle> 
 }
 
 /// Runs the scene benchmark on `shapes`; `repeats` timings, the fastest kept.
-pub fn run_scene_bench(shapes: &ShapeSet, repeats: usize) -> anyhow::Result<serde_json::Value> {
-    let opts = BlendOptions::default();
+pub fn run_scene_bench(
+    shapes: &ShapeSet,
+    repeats: usize,
+    sampled_start: bool,
+) -> anyhow::Result<serde_json::Value> {
+    let opts = BlendOptions {
+        sampled_start,
+        ..Default::default()
+    };
     // Not a sample weight of the sampled start (α = ½ would start at its equilibrium).
     let w = Weights::Alpha(0.4);
     let mut plain = PhysicalBlend::new(shapes, &opts)?;

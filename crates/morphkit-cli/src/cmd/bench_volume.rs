@@ -68,16 +68,13 @@ fn row(
     kind: &str,
     shapes: &ShapeSet,
     interior: &InteriorOptions,
-    ordering: FillOrdering,
+    opts: &BlendOptions,
     steps: usize,
     threads: usize,
 ) -> anyhow::Result<serde_json::Value> {
-    let opts = BlendOptions {
-        ordering,
-        ..Default::default()
-    };
+    let ordering = opts.ordering;
     let t0 = Instant::now();
-    let mut v = VolumetricBlend::new(shapes, &opts, interior, &AnchorOptions::default())?;
+    let mut v = VolumetricBlend::new(shapes, opts, interior, &AnchorOptions::default())?;
     let setup = t0.elapsed().as_secs_f64();
     let w: Vec<Weights> = (0..steps)
         .map(|k| Weights::Alpha(k as f64 / (steps.max(2) - 1) as f64))
@@ -129,7 +126,16 @@ fn row(
 
 /// Times the volumetric suite and prints one row per mesh and ordering, plus one row with a
 /// `tetgen` interior (density 1, METIS) on the same tube when `tetgen` is on the PATH.
-pub fn run_volume_bench(steps: usize, threads: usize) -> anyhow::Result<serde_json::Value> {
+pub fn run_volume_bench(
+    steps: usize,
+    threads: usize,
+    sampled_start: bool,
+) -> anyhow::Result<serde_json::Value> {
+    let with = |ordering| BlendOptions {
+        ordering,
+        sampled_start,
+        ..Default::default()
+    };
     let interior = InteriorOptions {
         mode: InteriorMode::Lattice,
         ..Default::default()
@@ -161,7 +167,13 @@ pub fn run_volume_bench(steps: usize, threads: usize) -> anyhow::Result<serde_js
         let name = format!("tube-{total}");
         for ordering in [FillOrdering::NestedDissection, FillOrdering::Amd] {
             rows.push(row(
-                &name, "lattice", &shapes, &interior, ordering, steps, threads,
+                &name,
+                "lattice",
+                &shapes,
+                &interior,
+                &with(ordering),
+                steps,
+                threads,
             )?);
         }
         if have_tetgen {
@@ -170,7 +182,7 @@ pub fn run_volume_bench(steps: usize, threads: usize) -> anyhow::Result<serde_js
                 "tetgen",
                 &shapes,
                 &tetgen,
-                FillOrdering::NestedDissection,
+                &with(FillOrdering::NestedDissection),
                 steps,
                 threads,
             )?);

@@ -58,6 +58,16 @@ pub fn assert_same_frame(a: &[[f64; 3]], b: &[[f64; 3]], what: &str) {
     );
 }
 
+/// The largest distance between corresponding points of `a` and `b`.
+pub fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| {
+            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+        })
+        .fold(0.0, f64::max)
+}
+
 /// A closed bar (4 × 0.6 × 0.6, 16 segments) and the same bar bent by 90° over its second
 /// half: its first half moves in no shape, so `FixedVertices::Auto` fixes it.
 pub fn bent_bar() -> morphkit::mesh::ShapeSet {
