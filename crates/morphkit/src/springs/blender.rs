@@ -8,7 +8,7 @@ use super::options::{
     check_options, BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary,
 };
 use super::rotation_predictor::RotationPredictor;
-use super::sampled_start::{Sampler, StartSamples};
+use super::sampled_start::{shifted, Sampler, StartSamples};
 use super::system::{expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem};
 use super::terms::{
     BlockHessian, BlockPattern, EnergyTerm, Held, HingeTerm, PointTarget, PointTerm, SpringTerm,
@@ -510,15 +510,7 @@ impl Rig {
             Start::Canonical if !self.options.sampled_start => None,
             Start::Canonical => {
                 let correction = self.samples.correction(c, &mut Sampler { rig: self, ws });
-                corrected = correction.map(|d| {
-                    let mut p = self.predicted(c);
-                    for (p, d) in p.iter_mut().zip(&d) {
-                        for k in 0..3 {
-                            p[k] += d[k];
-                        }
-                    }
-                    p
-                });
+                corrected = correction.map(|d| shifted(self.predicted(c), &d, 1.0));
                 corrected.as_deref()
             }
         };

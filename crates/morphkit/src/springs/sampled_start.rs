@@ -25,11 +25,13 @@
 //! weights and the rig alone, whichever frame, thread or order first asks for them. A sample
 //! that does not converge turns its target's correction off (deterministically).
 //!
-//! Measured (12 steps, α = k/11, Newton iterations / factorizations / CG iterations from
-//! $P$ against from $\tilde P$, samples not counted; every frame within 1e-6 of the
-//! diagonal of the solve from $P$): horse ↔ horse-05 63/38/350 → 37/15/177, ICT ↔ jawOpen
-//! 112/79/840 → 60/36/361, tubes 2.2k and 18.6k bent 90°: two Newton iterations per frame →
-//! one.
+//! Measured (36 steps, per step, plain start → sampled start, samples not counted;
+//! `morphkit bench --suite springs --steps 36 [--no-sampled-start]`): Newton iterations
+//! horse ↔ horse-05 5.83 → 3.53, ICT ↔ jawOpen 10.0 → 5.72, bent tubes about 2 → 0.94;
+//! factorizations 3.42 → 1.47 and 7.00 → 3.17. On the ten horse poses and ten ICT
+//! expressions at α = 0.1, 0.4, 0.6, 0.9 both starts reach the same minimum within
+//! 1e-8–1e-4 of the diagonal, except ICT eyeBlink_L/R at 0.6, where a thin eye strip has
+//! two minima (see the README).
 
 use super::blender::{FrameSolver, Rig, Start};
 use super::newton::Workspace;
@@ -74,6 +76,11 @@ impl StartSamples {
         } else {
             0
         }
+    }
+
+    /// Whether field `k` of target `s` has been computed (converged or not).
+    pub fn is_computed(&self, s: usize, k: usize) -> bool {
+        self.cells[s - 1][k].get().is_some()
     }
 
     /// Sample solves run so far.
@@ -157,6 +164,16 @@ fn half_weight(a: f64) -> f64 {
     4.0 * a * (1.0 - a)
 }
 
+/// `p + w d`, pointwise.
+pub(super) fn shifted(mut p: Vec<Point>, d: &[Point], w: f64) -> Vec<Point> {
+    for (p, d) in p.iter_mut().zip(d) {
+        for k in 0..3 {
+            p[k] += w * d[k];
+        }
+    }
+    p
+}
+
 impl PhysicalBlend {
     /// Computes the [sampled start](super::sampled_start)'s fields that solves for `weights`
     /// will read, spread over up to `threads` threads (the ½ samples first, then the others,
@@ -168,21 +185,25 @@ impl PhysicalBlend {
             return;
         }
         let n = self.rig.shapes.len();
-        let mut needed: Vec<(usize, usize)> = weights
+        let samples = &self.rig.samples;
+        let mut missing: Vec<(usize, usize)> = weights
             .iter()
             .filter_map(|w| w.coefficients(n).ok())
             .flat_map(|c| StartSamples::needed(&c).collect::<Vec<_>>())
+            .filter(|&(s, k)| !samples.is_computed(s, k))
             .collect();
-        needed.sort_unstable();
-        needed.dedup();
-        let mut halves: Vec<usize> = needed.iter().map(|&(s, _)| s).collect();
+        if missing.is_empty() {
+            return;
+        }
+        missing.sort_unstable();
+        missing.dedup();
+        let mut halves: Vec<(usize, usize)> = missing.iter().map(|&(s, _)| (s, 1)).collect();
         halves.dedup();
-        let sides: Vec<(usize, usize)> = needed.into_iter().filter(|&(_, k)| k != 1).collect();
+        let sides: Vec<(usize, usize)> = missing.into_iter().filter(|&(_, k)| k != 1).collect();
         let field = |f: &mut FrameSolver<'_>, &(s, k): &(usize, usize)| {
             let rig = f.rig;
             rig.samples.field(s, k, &mut Sampler { rig, ws: f.ws });
         };
-        let halves: Vec<(usize, usize)> = halves.into_iter().map(|s| (s, 1)).collect();
         self.map_frames(&halves, threads, field);
         self.map_frames(&sides, threads, field);
     }
@@ -226,12 +247,7 @@ impl SampleSolver for Sampler<'_> {
         let r = match half {
             None => self.rig.solve(self.ws, &c, &[], Start::Plain),
             Some(d) => {
-                let w = half_weight(a);
-                let from: Vec<Point> = p
-                    .iter()
-                    .zip(d)
-                    .map(|(p, d)| std::array::from_fn(|k| p[k] + w * d[k]))
-                    .collect();
+                let from = shifted(p.clone(), d, half_weight(a));
                 self.rig.solve(self.ws, &c, &[], Start::From(&from))
             }
         }
