@@ -203,7 +203,8 @@ impl PyPhysicalBlend {
     ///
     /// `fixed`: `"auto"` (default: vertices that move in no shape), `"none"`, or vertex ids
     /// (interpolated linearly). `hinge_weight` (default 0.01, 0 turns the bending term off),
-    /// `kinematic_stretch` (default 10), `gradient_tolerance` (default 1e-6),
+    /// `kinematic_stretch` (default 10), `thin_band_rings` (default 4: parts within 4 edges
+    /// of the boundary follow the predictor; 0 turns it off), `gradient_tolerance` (default 1e-6),
     /// `max_newton_iterations` (default 300), `sampled_start` (default True: frames start
     /// from the predictor corrected by each target's equilibria at ¼, ½, ¾, solved once per
     /// target on first need; False saves those three solves when only a frame or two is
@@ -215,8 +216,8 @@ impl PyPhysicalBlend {
     /// `morphkit blend --interior/--anchor`. `summary["interior"]` reports what was built.
     #[new]
     #[pyo3(signature = (base, targets, faces, *, fixed=None, hinge_weight=None,
-        kinematic_stretch=None, gradient_tolerance=None, max_newton_iterations=None,
-        sampled_start=true, interior=None, anchor=None))]
+        kinematic_stretch=None, thin_band_rings=None, gradient_tolerance=None,
+        max_newton_iterations=None, sampled_start=true, interior=None, anchor=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -226,6 +227,7 @@ impl PyPhysicalBlend {
         fixed: Option<&Bound<'_, PyAny>>,
         hinge_weight: Option<f64>,
         kinematic_stretch: Option<f64>,
+        thin_band_rings: Option<usize>,
         gradient_tolerance: Option<f64>,
         max_newton_iterations: Option<usize>,
         sampled_start: bool,
@@ -244,6 +246,9 @@ impl PyPhysicalBlend {
         }
         if let Some(s) = kinematic_stretch {
             opts.kinematic_stretch = s;
+        }
+        if let Some(r) = thin_band_rings {
+            opts.thin_band_rings = r;
         }
         if let Some(t) = gradient_tolerance {
             opts.gradient_tolerance = t;

@@ -99,6 +99,11 @@ pub struct BlendArgs {
     /// linear blend (kinematic); `inf` turns this off.
     #[arg(long, default_value_t = 10.0)]
     pub kinematic_stretch: f64,
+    /// Connected parts whose every vertex lies within N edges of the mesh boundary (eye
+    /// strips, eyelash and hair cards) follow the rotation-aware predictor instead of being
+    /// solved for; 0 turns this off.
+    #[arg(long, default_value_t = 4)]
+    pub thin_band_rings: usize,
     /// Refresh the Newton preconditioner every N iterations (0: only when it stalls). A speed
     /// knob; results agree within the tolerance.
     #[arg(long, default_value_t = 1)]
@@ -311,6 +316,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         fixed: read_fixed(&a.fixed)?,
         gradient_tolerance: a.tolerance,
         kinematic_stretch: a.kinematic_stretch,
+        thin_band_rings: a.thin_band_rings,
         refactor_every: a.refactor_every,
         keep_factor_cg: a.keep_factor_cg,
         sampled_start: !a.no_sampled_start,

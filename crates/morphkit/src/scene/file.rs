@@ -48,6 +48,7 @@ pub(crate) struct BlendSpec {
     pub bending: Option<bool>,
     pub hinge_weight: Option<f64>,
     pub kinematic_stretch: Option<f64>,
+    pub thin_band_rings: Option<usize>,
     pub tolerance: Option<f64>,
     pub max_newton_iterations: Option<usize>,
     pub interior: Option<Spanned<String>>,

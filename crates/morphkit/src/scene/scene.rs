@@ -16,7 +16,8 @@
 //! # interior = "lattice"                 # internal springs: "none", "lattice" or "tetgen",
 //! #                                      #   optionally ",density" (as `blend --interior`)
 //! # anchor = "auto"                      # the rigid anchor: "auto" or "x,y,z[,size]"
-//! # k0, bending, hinge_weight, kinematic_stretch, tolerance, max_newton_iterations
+//! # k0, bending, hinge_weight, kinematic_stretch, thin_band_rings, tolerance,
+//! # max_newton_iterations
 //!
 //! [collision]
 //! tolerance = 1e-4                       # × the base's bounding-box diagonal
@@ -361,6 +362,9 @@ fn blend_options(ctx: &Ctx, f: &SceneFile) -> Result<BlendOptions, SceneError> {
     }
     if let Some(k) = b.kinematic_stretch {
         o.kinematic_stretch = k;
+    }
+    if let Some(r) = b.thin_band_rings {
+        o.thin_band_rings = r;
     }
     if let Some(t) = b.tolerance {
         o.gradient_tolerance = t;

@@ -2,7 +2,7 @@
 //! memory check and the symbolic analysis), then canonical solves, one weight vector at a time
 //! or many in parallel.
 
-use super::constraints::{stretched_vertices, Components, Constraints};
+use super::constraints::{stretched_vertices, thin_bands, Components, Constraints};
 use super::newton::{projected_newton, trust_region, Problem, Workspace};
 use super::options::{
     check_options, BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary,
@@ -82,7 +82,7 @@ pub(super) struct Rig {
     mean_stiffness: f64,
     /// The rotation-aware predictor, when asked for and possible.
     rotation: Option<RotationPredictor>,
-    /// Per vertex: held by a boundary condition.
+    /// Per vertex: held at the linear blend by a boundary condition (not the bands).
     is_fixed: Vec<bool>,
     /// Each target's correction fields of the sampled start.
     pub(super) samples: StartSamples,
@@ -199,9 +199,12 @@ impl PhysicalBlend {
         let block_pattern = Arc::new(BlockPattern::new(n, &pairs));
         let components = Components::from_pairs(n, pairs);
         let kinematic = stretched_vertices(shapes, o.kinematic_stretch);
-        let constraints = Constraints::new(shapes, &components, &o.fixed, &kinematic)?;
-        summary.fixed_vertices = constraints.fixed.len() - constraints.kinematic.len();
+        let bands = thin_bands(&topology, &components, o.thin_band_rings);
+        let constraints = Constraints::new(shapes, &components, &o.fixed, &kinematic, &bands)?;
+        summary.fixed_vertices =
+            constraints.fixed.len() - constraints.kinematic.len() - constraints.bands.len();
         summary.kinematic_vertices = constraints.kinematic.len();
+        summary.band_vertices = constraints.bands.len();
         summary.gauged_components = constraints.gauges.len();
         let vertex_order = match o.ordering {
             FillOrdering::NestedDissection => Some(vertex_nested_dissection(&block_pattern)?),
@@ -222,9 +225,13 @@ impl PhysicalBlend {
             Predictor::RotationAware => RotationPredictor::new(shapes, &components),
             Predictor::Linear => None,
         };
+        // Held at the linear blend (bands are held at the predictor, which places them).
         let mut is_fixed = vec![false; n];
         for &v in &constraints.fixed {
             is_fixed[v as usize] = true;
+        }
+        for &v in &constraints.bands {
+            is_fixed[v as usize] = false;
         }
         let ordering = match &vertex_order {
             Some(order) => Ordering::Custom(expand_vertex_order(order, &system.dof_index)),
@@ -441,25 +448,31 @@ impl FrameSolver<'_> {
 
 impl Rig {
     /// Where a solve starts, in solver coordinates: `start_from` (with fixed vertices at
-    /// their linear blend) when given, else the predictor $P(c)$.
+    /// their linear blend and thin bands at the predictor) when given, else the predictor
+    /// $P(c)$.
     pub(super) fn start(
         &self,
         c: &[f64],
         lin: &[crate::mesh::Point],
         start_from: Option<&[crate::mesh::Point]>,
     ) -> Vec<f64> {
+        let bands = &self.constraints.bands;
         let predicted = match (start_from, &self.rotation) {
-            (None, Some(r)) => r.predict(c, lin, &self.is_fixed),
-            _ => None,
+            (Some(_), _) if bands.is_empty() => None,
+            (_, Some(r)) => r.predict(c, lin, &self.is_fixed),
+            (_, None) => None,
         };
-        let mut x = predictor::predict(
-            &self.constraints,
-            start_from.or(predicted.as_deref()).unwrap_or(lin),
-        );
+        let predicted = predicted.as_deref();
+        let mut x = predictor::predict(&self.constraints, start_from.or(predicted).unwrap_or(lin));
         if start_from.is_some() {
             for &v in &self.constraints.fixed {
                 let v = v as usize;
                 x[3 * v..3 * v + 3].copy_from_slice(&lin[v]);
+            }
+            let held = predicted.unwrap_or(lin);
+            for &v in bands {
+                let v = v as usize;
+                x[3 * v..3 * v + 3].copy_from_slice(&held[v]);
             }
         }
         x

@@ -40,6 +40,9 @@ pub struct Constraints {
     pub fixed: Vec<u32>,
     /// The kinematic vertices among them (over-stretched triangles), sorted.
     pub kinematic: Vec<u32>,
+    /// The vertices of thin bands among them (see [`thin_bands`]), sorted: they are held at
+    /// the predictor $P(w)$, not at the linear blend.
+    pub bands: Vec<u32>,
     /// Components held only by the gauge, to align after each solve.
     pub gauges: Vec<Gauge>,
     /// Per degree of freedom (`3 #V`): fixed by a boundary condition or by the gauge.
@@ -52,12 +55,15 @@ impl Constraints {
     /// `kinematic` vertices (see
     /// [`stretched_vertices`]) are held like automatic ones: where they, with the other fixed
     /// vertices of their component, span a plane they follow the linear blend; otherwise that
-    /// component keeps its gauge and they are solved for.
+    /// component keeps its gauge and they are solved for. The vertices of `bands` (whole
+    /// components, see [`thin_bands`]) that are not fixed are held too, at the predictor;
+    /// such a component needs no gauge.
     pub fn new(
         shapes: &ShapeSet,
         components: &Components,
         spec: &FixedVertices,
         kinematic: &[u32],
+        bands: &[u32],
     ) -> Result<Self, BlendError> {
         let n = shapes.num_vertices();
         let base = shapes.positions(0);
@@ -93,6 +99,12 @@ impl Constraints {
                 is_kinematic[v as usize] = true;
             }
         }
+        let mut is_band = vec![false; n];
+        for &v in bands {
+            if (v as usize) < n {
+                is_band[v as usize] = true;
+            }
+        }
         let comp = &components.label;
         let mut members: Vec<Vec<u32>> = vec![Vec::new(); components.count];
         for v in 0..n {
@@ -102,6 +114,17 @@ impl Constraints {
         let mut fixed_dof = vec![false; 3 * n];
         let mut gauges = Vec::new();
         for (c, verts) in members.iter().enumerate() {
+            if verts.iter().all(|&v| is_band[v as usize]) {
+                // A thin band follows the predictor: every vertex held, nothing to gauge.
+                for &v in verts {
+                    is_kinematic[v as usize] = false;
+                    is_band[v as usize] = !is_fixed[v as usize];
+                }
+                continue;
+            }
+            for &v in verts {
+                is_band[v as usize] = false;
+            }
             let fixed_here: Vec<Point> = verts
                 .iter()
                 .filter(|&&v| is_fixed[v as usize])
@@ -148,8 +171,9 @@ impl Constraints {
         let kinematic: Vec<u32> = (0..n as u32)
             .filter(|&v| is_kinematic[v as usize])
             .collect();
+        let bands: Vec<u32> = (0..n as u32).filter(|&v| is_band[v as usize]).collect();
         let fixed: Vec<u32> = (0..n as u32)
-            .filter(|&v| is_fixed[v as usize] || is_kinematic[v as usize])
+            .filter(|&v| is_fixed[v as usize] || is_kinematic[v as usize] || is_band[v as usize])
             .collect();
         for &v in &fixed {
             for a in 0..3 {
@@ -159,6 +183,7 @@ impl Constraints {
         Ok(Self {
             fixed,
             kinematic,
+            bands,
             gauges,
             fixed_dof,
         })
@@ -272,6 +297,59 @@ pub fn stretched_vertices(shapes: &ShapeSet, threshold: f64) -> Vec<u32> {
     }
     (0..mark.len() as u32)
         .filter(|&v| mark[v as usize])
+        .collect()
+}
+
+/// Vertices of *thin bands*: connected components (under `components`) every vertex of which
+/// lies within `rings` mesh edges of the mesh boundary, such as the eye-occlusion strips,
+/// tear films and eyelash cards of a face rig, or hair cards. `rings = 0` finds none.
+///
+/// Why they are not solved for: a band a few triangles wide has no material across its
+/// width to hold its shape, and when a target compresses it (a blink folds the strip along
+/// the closing lid) the blended rest lengths are met better by a crumpled band than by the
+/// smooth one, so its equilibrium snaps from one crumpled state to another between frames
+/// (ICT eyeBlink_L: 30 folded triangles where the linear blend has none, a jump of 12.8×
+/// the linear blend's step). The rotation-aware predictor $P(w)$ interpolates each triangle's
+/// rotation and stretch and has no such folds, so bands are held there (see
+/// [`Constraints::bands`]). Components with a vertex that no triangle uses (an interior
+/// lattice) or without boundary are never bands.
+pub fn thin_bands(topology: &Topology, components: &Components, rings: usize) -> Vec<u32> {
+    let n = topology.num_vertices();
+    if rings == 0 {
+        return Vec::new();
+    }
+    // Breadth-first ring distance from the boundary over mesh edges.
+    let mut dist = vec![usize::MAX; n];
+    let mut queue = std::collections::VecDeque::new();
+    for (v, b) in topology.boundary_vertices().into_iter().enumerate() {
+        if b {
+            dist[v] = 0;
+            queue.push_back(v);
+        }
+    }
+    while let Some(v) = queue.pop_front() {
+        if dist[v] >= rings {
+            continue;
+        }
+        for &w in topology.one_ring(v) {
+            if dist[w as usize] == usize::MAX {
+                dist[w as usize] = dist[v] + 1;
+                queue.push_back(w as usize);
+            }
+        }
+    }
+    let mut far = vec![false; components.count];
+    let mut size = vec![0usize; components.count];
+    for v in 0..n {
+        let c = components.label[v] as usize;
+        size[c] += 1;
+        far[c] |= dist[v] > rings;
+    }
+    (0..n as u32)
+        .filter(|&v| {
+            let c = components.label[v as usize] as usize;
+            !far[c] && size[c] >= 3
+        })
         .collect()
 }
 
@@ -431,13 +509,25 @@ mod tests {
             generate::rotate(&m.positions, [0.0; 3], [0.0, 0.0, 1.0], 1.0),
         );
         let t = Topology::new(m.num_vertices(), &m.triangles);
-        let c =
-            Constraints::new(&s, &Components::of_topology(&t), &FixedVertices::None, &[]).unwrap();
+        let c = Constraints::new(
+            &s,
+            &Components::of_topology(&t),
+            &FixedVertices::None,
+            &[],
+            &[],
+        )
+        .unwrap();
         assert_eq!(c.fixed_dof.iter().filter(|f| **f).count(), 6);
         assert_eq!(c.gauges.len(), 1);
         // Auto finds the two poles on the rotation axis: collinear, so ignored.
-        let c =
-            Constraints::new(&s, &Components::of_topology(&t), &FixedVertices::Auto, &[]).unwrap();
+        let c = Constraints::new(
+            &s,
+            &Components::of_topology(&t),
+            &FixedVertices::Auto,
+            &[],
+            &[],
+        )
+        .unwrap();
         assert_eq!(c.fixed_dof.iter().filter(|f| **f).count(), 6);
         assert!(c.fixed.is_empty());
     }
@@ -447,14 +537,21 @@ mod tests {
         let m = generate::tube(0.5, 4.0, 8, 8, false);
         let s = set_of(&m, generate::bend(&m.positions, 2.0, 2.0, 1.5));
         let t = Topology::new(m.num_vertices(), &m.triangles);
-        let c =
-            Constraints::new(&s, &Components::of_topology(&t), &FixedVertices::Auto, &[]).unwrap();
+        let c = Constraints::new(
+            &s,
+            &Components::of_topology(&t),
+            &FixedVertices::Auto,
+            &[],
+            &[],
+        )
+        .unwrap();
         assert_eq!(c.fixed.len(), 5 * 8, "rings at x ≤ 2 do not move");
         assert!(c.gauges.is_empty());
         let e = Constraints::new(
             &s,
             &Components::of_topology(&t),
             &FixedVertices::Ids(vec![0, 8]),
+            &[],
             &[],
         )
         .unwrap_err();
@@ -464,11 +561,52 @@ mod tests {
             &Components::of_topology(&t),
             &FixedVertices::Ids(vec![0, 9999]),
             &[],
+            &[],
         )
         .unwrap_err();
         assert!(matches!(
             e,
             BlendError::FixedOutOfRange { vertex: 9999, .. }
         ));
+    }
+
+    /// A strip 4 quads wide (every vertex within 2 rings of its boundary) is a band at 2
+    /// rings and not at 1; a 12 × 12 patch beside it (6 rings deep) is none, nor is a closed
+    /// sphere; a band needs no gauge and all of it is held, and `0` rings finds nothing.
+    #[test]
+    fn thin_bands_are_whole_narrow_components() {
+        let strip = generate::grid(30, 4, 6.0, 0.8);
+        let patch = generate::grid(12, 12, 3.0, 3.0);
+        let sphere = generate::uv_sphere(1.0, 6, 8);
+        let mut p = strip.positions.clone();
+        let mut t = strip.triangles.clone();
+        for m in [&patch, &sphere] {
+            let off = p.len() as u32;
+            p.extend(m.positions.iter().map(|q| [q[0], q[1] + 5.0, q[2]]));
+            t.extend(m.triangles.iter().map(|f| f.map(|v| v + off)));
+        }
+        let m = crate::mesh::TriMesh::new(p, t);
+        let topo = Topology::new(m.num_vertices(), &m.triangles);
+        let comps = Components::of_topology(&topo);
+        let ns = strip.num_vertices() as u32;
+        assert_eq!(thin_bands(&topo, &comps, 2), (0..ns).collect::<Vec<_>>());
+        assert!(thin_bands(&topo, &comps, 1).is_empty());
+        assert!(thin_bands(&topo, &comps, 0).is_empty());
+        assert_eq!(thin_bands(&topo, &comps, 6).len(), (ns + 13 * 13) as usize);
+        let moved: Vec<Point> = m
+            .positions
+            .iter()
+            .map(|q| [q[0], q[1], q[2] + q[0]])
+            .collect();
+        let s = set_of(&m, moved);
+        let bands = thin_bands(&topo, &comps, 2);
+        let c = Constraints::new(&s, &comps, &FixedVertices::None, &[], &bands).unwrap();
+        assert_eq!(c.bands, bands);
+        assert!(bands.iter().all(|v| c.fixed.binary_search(v).is_ok()));
+        assert_eq!(
+            c.gauges.len(),
+            2,
+            "the patch and the sphere keep their gauges"
+        );
     }
 }

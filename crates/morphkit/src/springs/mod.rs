@@ -43,6 +43,11 @@
 //! - **Kinematic sheets.** Triangles stretched more than [`BlendOptions::kinematic_stretch`]
 //!   (default 10×) between the base and a target are no material: their vertices follow the
 //!   linear blend as boundary conditions, chosen once per rig.
+//! - **Thin bands.** Connected components every vertex of which lies within
+//!   [`BlendOptions::thin_band_rings`] (default 4) edges of the boundary ([`thin_bands`]: eye
+//!   strips, tear films, eyelash and hair cards) have no material across their width and
+//!   crumple under blended rest lengths; they are held at the predictor $P(w)$, also chosen
+//!   once per rig.
 //! - **Failures are loud.** A solve that does not reach the tolerance returns
 //!   `converged = false` with the vertices whose residual force is above it.
 //!
@@ -75,7 +80,9 @@ pub mod weights;
 
 pub(crate) use blender::report_lost;
 pub use blender::{blend, BlendPredictor, FrameSolver, PhysicalBlend};
-pub use constraints::{stretched_vertices, Components, Constraints, FixedVertices, Gauge};
+pub use constraints::{
+    stretched_vertices, thin_bands, Components, Constraints, FixedVertices, Gauge,
+};
 pub use interior::{
     AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions, SurfacePredictor,
     VolumetricBlend,

@@ -37,6 +37,14 @@ pub struct BlendOptions {
     /// the horse poses stretch at most 3 triangles past it (11×), and compress up to 30×,
     /// which never counts.
     pub kinematic_stretch: f64,
+    /// Components every vertex of which lies within this many mesh edges of the boundary are
+    /// *thin bands* ([`thin_bands`](super::thin_bands)): strips and cards such as a face
+    /// rig's eye-occlusion strips, tear films and eyelashes. They have no material across
+    /// their width, buckle under the blended rest lengths and snap between frames, so they
+    /// follow the predictor $P(w)$ as boundary conditions. `0` turns this off. Default `4`
+    /// (a band up to about 9 edges across): the ICT head's strips are 3–4 rings wide, its
+    /// mouth socket 16, its face 89; the horse, the camel and the closed meshes have none.
+    pub thin_band_rings: usize,
     /// Armijo sufficient-decrease constant of the [`LinearSolver::Direct`] line search.
     /// Default `1e-4`.
     pub armijo: f64,
@@ -170,6 +178,7 @@ impl Default for BlendOptions {
             max_newton_iterations: 300,
             min_rest_fraction: 0.05,
             kinematic_stretch: 10.0,
+            thin_band_rings: 4,
             armijo: 1e-4,
             predictor: Predictor::RotationAware,
             sampled_start: true,
@@ -234,6 +243,9 @@ pub struct RigSummary {
     pub fixed_vertices: usize,
     /// Vertices of over-stretched (kinematic) triangles that follow the linear blend.
     pub kinematic_vertices: usize,
+    /// Vertices of thin bands that follow the predictor
+    /// ([`BlendOptions::thin_band_rings`]).
+    pub band_vertices: usize,
     /// Connected components held only by the rigid gauge.
     pub gauged_components: usize,
     /// Free unknowns of the Newton system.

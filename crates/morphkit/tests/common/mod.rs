@@ -1,6 +1,8 @@
 //! Shared helpers for integration tests: access to the real meshes under `MORPHKIT_DATA`.
 #![allow(dead_code)]
 
+pub mod sequence;
+
 use std::path::PathBuf;
 
 /// The data directory, or `None` when `MORPHKIT_DATA` is unset (real-data tests then skip).

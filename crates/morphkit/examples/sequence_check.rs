@@ -1,0 +1,136 @@
+//! Issue 7's whole-sequence properties on the real rigs: each target blended from the base
+//! over `STEPS` frames (α = k / (STEPS − 1)), every frame checked by the tests'
+//! `common::sequence::check_sequence` (convergence, steps against the linear blend's, folds,
+//! distance from the linear blend). The test `springs_sequences_real_data` asserts the same on
+//! 36 steps; this prints the numbers and can vary the options.
+//!
+//! ```sh
+//! MORPHKIT_DATA=$(cd ../shared/data && pwd) cargo run --release -p morphkit \
+//!     --example sequence_check -- [horse|ict|all] [STEPS] [NAME-FILTER]
+//! ```
+//!
+//! `HINGE=c` sets the hinge weight, `BANDS=r` the thin-band rings, `NO_SAMPLED=1` starts
+//! from the plain predictor, and `DUMP=DIR` writes every frame's physical, predicted and
+//! linear positions as raw little-endian f64 (`#V × 3`) to `DIR/NAME-{phys,pred,lin}-KK.f64`
+//! for pictures.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use common::sequence::{check_sequence, ramp};
+use morphkit::io::read_shape_set;
+use morphkit::mesh::Point;
+use morphkit::springs::{linear_blend, BlendOptions, BlendResult, PhysicalBlend};
+
+const ICT: [&str; 10] = [
+    "browInnerUp_L",
+    "cheekPuff_L",
+    "eyeBlink_L",
+    "eyeBlink_R",
+    "jawLeft",
+    "jawOpen",
+    "mouthFunnel",
+    "mouthPucker",
+    "mouthSmile_L",
+    "mouthSmile_R",
+];
+
+fn env<T: std::str::FromStr>(name: &str) -> Option<T> {
+    std::env::var(name).ok().and_then(|v| v.parse().ok())
+}
+
+fn options() -> BlendOptions {
+    let mut o = BlendOptions {
+        sampled_start: std::env::var("NO_SAMPLED").is_err(),
+        ..Default::default()
+    };
+    if let Some(h) = env("HINGE") {
+        o.hinges.weight = h;
+    }
+    if let Some(r) = env("BANDS") {
+        o.thin_band_rings = r;
+    }
+    o
+}
+
+fn dump(name: &str, solver: &PhysicalBlend, targets: usize, target: usize, frames: &[BlendResult]) {
+    let Ok(dir) = std::env::var("DUMP") else {
+        return;
+    };
+    let write = |kind: &str, k: usize, p: &[Point]| {
+        let bytes: Vec<u8> = p.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+        std::fs::write(format!("{dir}/{name}-{kind}-{k:02}.f64"), bytes).unwrap();
+    };
+    for (k, (w, r)) in ramp(targets, target, frames.len())
+        .iter()
+        .zip(frames)
+        .enumerate()
+    {
+        write("phys", k, &r.positions);
+        write("pred", k, &solver.predict(w).unwrap());
+        write("lin", k, &linear_blend(solver.shapes(), w).unwrap());
+    }
+}
+
+fn run(
+    name: &str,
+    solver: &mut PhysicalBlend,
+    targets: usize,
+    target: usize,
+    steps: usize,
+) -> bool {
+    let t0 = std::time::Instant::now();
+    let rep = check_sequence(name, solver, targets, target, steps);
+    let secs = t0.elapsed().as_secs_f64();
+    dump(name, solver, targets, target, &rep.frames);
+    for f in &rep.failures {
+        println!("  {f}");
+    }
+    println!(
+        "{name}: {} — worst step {:.2}× linear, folds over linear {}, from linear {:.3}, {} Newton, {secs:.1} s",
+        if rep.failures.is_empty() { "ok" } else { "FAILS" },
+        rep.worst_step,
+        rep.worst_fold_excess,
+        rep.worst_from_linear,
+        rep.newton
+    );
+    rep.failures.is_empty()
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let which = args.get(1).map(String::as_str).unwrap_or("all");
+    let steps: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(36);
+    let filter = args.get(3).cloned().unwrap_or_default();
+    let data = |rel: &str| common::data_file(rel).expect("set MORPHKIT_DATA to ../shared/data");
+    let mut failures = Vec::new();
+    if which == "horse" || which == "all" {
+        for pose in 1..=10 {
+            let name = format!("horse-{pose:02}");
+            if !name.contains(&filter) {
+                continue;
+            }
+            let s = read_shape_set(&[
+                data("sumner-horse-camel/horse-reference.obj.gz"),
+                data(&format!("sumner-horse-camel/{name}.obj.gz")),
+            ])
+            .unwrap();
+            let mut solver = PhysicalBlend::new(&s, &options()).unwrap();
+            if !run(&name, &mut solver, 1, 0, steps) {
+                failures.push(name);
+            }
+        }
+    }
+    if which == "ict" || which == "all" {
+        let mut paths = vec![data("ict-facekit/generic_neutral_mesh.obj.gz")];
+        paths.extend(ICT.iter().map(|e| data(&format!("ict-facekit/{e}.obj.gz"))));
+        let s = read_shape_set(&paths).unwrap();
+        let mut solver = PhysicalBlend::new(&s, &options()).unwrap();
+        for (k, e) in ICT.iter().enumerate() {
+            if e.contains(&filter) && !run(e, &mut solver, ICT.len(), k, steps) {
+                failures.push(e.to_string());
+            }
+        }
+    }
+    println!("failing sequences: {failures:?}");
+}

@@ -1,0 +1,96 @@
+//! Issue 7's whole-sequence properties on every real rig under `MORPHKIT_DATA` (skipped when
+//! unset, failing when set but a file is missing): each horse pose and each ICT expression
+//! blended from the base over 36 steps, every frame checked by
+//! `common::sequence::check_sequence` (converged, finite, no more folded triangles than the
+//! linear blend, steps within `STEP_BOUND` × the linear blend's, no vertex farther from the
+//! linear blend than half the largest move).
+//!
+//! Known failures, measured and reported in the README ("A known failure of issue 7's
+//! properties"), are listed in [`KNOWN`]: on them only convergence, finiteness and the fold
+//! count are asserted, and the test fails when one of them starts to pass, so that the list
+//! is kept true.
+
+mod common;
+
+use common::sequence::{check_sequence, SequenceReport};
+use morphkit::io::read_shape_set;
+use morphkit::springs::{BlendOptions, PhysicalBlend};
+
+const ICT: [&str; 10] = [
+    "browInnerUp_L",
+    "cheekPuff_L",
+    "eyeBlink_L",
+    "eyeBlink_R",
+    "jawLeft",
+    "jawOpen",
+    "mouthFunnel",
+    "mouthPucker",
+    "mouthSmile_L",
+    "mouthSmile_R",
+];
+
+/// Sequences that break the step or distance bound with the default options: three horse
+/// legs snap between two equilibria (a lower hind leg turns by a tenth of the body in one
+/// step, 5.8–8.8× the linear step), horse-07's hind hoof lies 0.51 of the largest move from
+/// the linear blend, and ICT jawOpen's gums and tongue, hanging on the kinematic mouth strip,
+/// swing through 25× the linear step.
+const KNOWN: [&str; 5] = ["horse-02", "horse-04", "horse-06", "horse-07", "jawOpen"];
+
+fn assert_holds(name: &str, rep: &SequenceReport) {
+    eprintln!(
+        "{name}: worst step {:.2}× linear, fold excess {}, from linear {:.3}, {} Newton",
+        rep.worst_step, rep.worst_fold_excess, rep.worst_from_linear, rep.newton
+    );
+    if KNOWN.contains(&name) {
+        for (k, f) in rep.frames.iter().enumerate() {
+            assert!(f.stats.converged, "{name} frame {k} did not converge");
+            assert!(f.positions.iter().flatten().all(|c| c.is_finite()));
+        }
+        assert!(rep.worst_fold_excess <= 0, "{name}: {:#?}", rep.failures);
+        assert!(
+            !rep.failures.is_empty(),
+            "{name} now passes: take it off the known failures"
+        );
+    } else {
+        assert!(rep.failures.is_empty(), "{:#?}", rep.failures);
+    }
+}
+
+#[test]
+fn horse_pose_sequences() {
+    for pose in 1..=10 {
+        let name = format!("horse-{pose:02}");
+        let paths: Option<Vec<_>> = ["horse-reference", name.as_str()]
+            .iter()
+            .map(|n| common::data_file(&format!("sumner-horse-camel/{n}.obj.gz")))
+            .collect();
+        let Some(paths) = paths else {
+            return common::skip("horse_pose_sequences");
+        };
+        let s = read_shape_set(&paths).unwrap();
+        let mut solver = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap();
+        assert_holds(&name, &check_sequence(&name, &mut solver, 1, 0, 36));
+    }
+}
+
+#[test]
+fn ict_expression_sequences() {
+    let mut names = vec!["generic_neutral_mesh".to_string()];
+    names.extend(ICT.iter().map(|e| e.to_string()));
+    let paths: Option<Vec<_>> = names
+        .iter()
+        .map(|n| common::data_file(&format!("ict-facekit/{n}.obj.gz")))
+        .collect();
+    let Some(paths) = paths else {
+        return common::skip("ict_expression_sequences");
+    };
+    let s = read_shape_set(&paths).unwrap();
+    let mut solver = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap();
+    // Bands: two eye-occlusion strips (152 vertices each), two tear films (204) and twelve
+    // eyelash cards (114); the two 24-vertex eye pieces are bands too but move in no
+    // expression, so they are fixed instead.
+    assert_eq!(solver.summary().band_vertices, 2 * 152 + 2 * 204 + 12 * 114);
+    for (k, e) in ICT.iter().enumerate() {
+        assert_holds(e, &check_sequence(e, &mut solver, ICT.len(), k, 36));
+    }
+}
