@@ -203,8 +203,8 @@ impl PyPhysicalBlend {
     ///
     /// `fixed`: `"auto"` (default: vertices that move in no shape), `"none"`, or vertex ids
     /// (interpolated linearly). `hinge_weight` (default 0.01, 0 turns the bending term off),
-    /// `kinematic_stretch` (default 10), `thin_band_rings` (default 4: parts within 4 edges
-    /// of the boundary follow the predictor; 0 turns it off), `gradient_tolerance` (default 1e-6),
+    /// `kinematic_stretch` (default 10), `thin_band_rings` (default 4: long parts within 4
+    /// edges of the boundary follow the predictor; 0 turns it off), `gradient_tolerance` (default 1e-6),
     /// `max_newton_iterations` (default 300), `sampled_start` (default True: frames start
     /// from the predictor corrected by each target's equilibria at ¼, ½, ¾, solved once per
     /// target on first need; False saves those three solves when only a frame or two is

@@ -99,9 +99,9 @@ pub struct BlendArgs {
     /// linear blend (kinematic); `inf` turns this off.
     #[arg(long, default_value_t = 10.0)]
     pub kinematic_stretch: f64,
-    /// Connected parts whose every vertex lies within N edges of the mesh boundary (eye
-    /// strips, eyelash and hair cards) follow the rotation-aware predictor instead of being
-    /// solved for; 0 turns this off.
+    /// Connected parts whose every vertex lies within N edges of the mesh boundary and that
+    /// are at least twice as long as wide (eye strips, eyelash and hair cards) follow the
+    /// rotation-aware predictor instead of being solved for; 0 turns this off.
     #[arg(long, default_value_t = 4)]
     pub thin_band_rings: usize,
     /// Refresh the Newton preconditioner every N iterations (0: only when it stalls). A speed

@@ -120,6 +120,8 @@ impl SceneBlend {
                 Some(format!(
                     "is out of range: the mesh has {n} vertices (ids are 0-based)"
                 ))
+            } else if constraints.bands.binary_search(&(v as u32)).is_ok() {
+                Some("lies on a thin band, which follows the predictor (blend.thin_band_rings = 0 solves it as springs)".to_string())
             } else if fixed[v] {
                 Some("is a fixed vertex; a pull cannot move it".to_string())
             } else if gauged[v] {

@@ -44,8 +44,9 @@
 //!   (default 10×) between the base and a target are no material: their vertices follow the
 //!   linear blend as boundary conditions, chosen once per rig.
 //! - **Thin bands.** Connected components every vertex of which lies within
-//!   [`BlendOptions::thin_band_rings`] (default 4) edges of the boundary ([`thin_bands`]: eye
-//!   strips, tear films, eyelash and hair cards) have no material across their width and
+//!   [`BlendOptions::thin_band_rings`] (default 4) edges of the boundary, and at least twice
+//!   as long as wide ([`thin_bands`]: eye strips, tear films, eyelash and hair cards), have no
+//!   material across their width and
 //!   crumple under blended rest lengths; they are held at the predictor $P(w)$, also chosen
 //!   once per rig.
 //! - **Failures are loud.** A solve that does not reach the tolerance returns

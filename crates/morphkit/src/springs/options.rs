@@ -37,9 +37,9 @@ pub struct BlendOptions {
     /// the horse poses stretch at most 3 triangles past it (11×), and compress up to 30×,
     /// which never counts.
     pub kinematic_stretch: f64,
-    /// Components every vertex of which lies within this many mesh edges of the boundary are
-    /// *thin bands* ([`thin_bands`](super::thin_bands)): strips and cards such as a face
-    /// rig's eye-occlusion strips, tear films and eyelashes. They have no material across
+    /// Components every vertex of which lies within this many mesh edges of the boundary, and
+    /// at least twice as long as wide, are *thin bands* ([`thin_bands`](super::thin_bands)):
+    /// strips and cards such as a face rig's eye-occlusion strips, tear films and eyelashes. They have no material across
     /// their width, buckle under the blended rest lengths and snap between frames, so they
     /// follow the predictor $P(w)$ as boundary conditions. `0` turns this off. Default `4`
     /// (a band up to about 9 edges across): the ICT head's strips are 3–4 rings wide, its
