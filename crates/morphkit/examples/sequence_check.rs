@@ -22,19 +22,6 @@ use morphkit::io::read_shape_set;
 use morphkit::mesh::Point;
 use morphkit::springs::{linear_blend, BlendOptions, BlendResult, PhysicalBlend};
 
-const ICT: [&str; 10] = [
-    "browInnerUp_L",
-    "cheekPuff_L",
-    "eyeBlink_L",
-    "eyeBlink_R",
-    "jawLeft",
-    "jawOpen",
-    "mouthFunnel",
-    "mouthPucker",
-    "mouthSmile_L",
-    "mouthSmile_R",
-];
-
 fn env<T: std::str::FromStr>(name: &str) -> Option<T> {
     std::env::var(name).ok().and_then(|v| v.parse().ok())
 }
@@ -122,12 +109,12 @@ fn main() {
         }
     }
     if which == "ict" || which == "all" {
-        let mut paths = vec![data("ict-facekit/generic_neutral_mesh.obj.gz")];
-        paths.extend(ICT.iter().map(|e| data(&format!("ict-facekit/{e}.obj.gz"))));
+        let paths = common::ict_rig_paths().expect("set MORPHKIT_DATA to ../shared/data");
         let s = read_shape_set(&paths).unwrap();
         let mut solver = PhysicalBlend::new(&s, &options()).unwrap();
-        for (k, e) in ICT.iter().enumerate() {
-            if e.contains(&filter) && !run(e, &mut solver, ICT.len(), k, steps) {
+        let ict = common::ICT_EXPRESSIONS;
+        for (k, e) in ict.iter().enumerate() {
+            if e.contains(&filter) && !run(e, &mut solver, ict.len(), k, steps) {
                 failures.push(e.to_string());
             }
         }

@@ -41,19 +41,7 @@ fn expected() -> Vec<(String, usize, usize, Option<usize>)> {
         add(format!("generic-meshes/{f}.obj.gz"), nv, nt, None);
     }
     // 25836 quads + 548 triangles = 26384 polygons, 2 × 25836 + 548 triangles.
-    for f in [
-        "generic_neutral_mesh",
-        "browInnerUp_L",
-        "cheekPuff_L",
-        "eyeBlink_L",
-        "eyeBlink_R",
-        "jawLeft",
-        "jawOpen",
-        "mouthFunnel",
-        "mouthPucker",
-        "mouthSmile_L",
-        "mouthSmile_R",
-    ] {
+    for f in std::iter::once("generic_neutral_mesh").chain(common::ICT_EXPRESSIONS) {
         add(
             format!("ict-facekit/{f}.obj.gz"),
             26719,

@@ -10,18 +10,7 @@ use morphkit::mesh::{bbox_diagonal, generate, Point, ShapeSet, Topology};
 use morphkit::springs::{fold_metrics, BlendOptions, PhysicalBlend, Weights};
 use std::path::PathBuf;
 
-const ICT: [&str; 10] = [
-    "browInnerUp_L",
-    "cheekPuff_L",
-    "eyeBlink_L",
-    "eyeBlink_R",
-    "jawLeft",
-    "jawOpen",
-    "mouthFunnel",
-    "mouthPucker",
-    "mouthSmile_L",
-    "mouthSmile_R",
-];
+use common::ICT_EXPRESSIONS as ICT;
 
 use common::max_dist;
 
@@ -107,9 +96,7 @@ fn horse_poses_endpoints_and_quality() {
 }
 
 fn ict_rig() -> Option<ShapeSet> {
-    let mut names = vec!["generic_neutral_mesh.obj.gz".to_string()];
-    names.extend(ICT.iter().map(|e| format!("{e}.obj.gz")));
-    Some(read_shape_set(&files("ict-facekit", &names)?).unwrap())
+    Some(read_shape_set(&common::ict_rig_paths()?).unwrap())
 }
 
 #[test]

@@ -16,19 +16,6 @@ use common::sequence::{check_sequence, SequenceReport};
 use morphkit::io::read_shape_set;
 use morphkit::springs::{BlendOptions, PhysicalBlend};
 
-const ICT: [&str; 10] = [
-    "browInnerUp_L",
-    "cheekPuff_L",
-    "eyeBlink_L",
-    "eyeBlink_R",
-    "jawLeft",
-    "jawOpen",
-    "mouthFunnel",
-    "mouthPucker",
-    "mouthSmile_L",
-    "mouthSmile_R",
-];
-
 /// Sequences that break the step or distance bound with the default options: three horse
 /// legs snap between two equilibria (a lower hind leg turns by a tenth of the body in one
 /// step, 5.8–8.8× the linear step), horse-07's hind hoof lies 0.51 of the largest move from
@@ -75,13 +62,7 @@ fn horse_pose_sequences() {
 
 #[test]
 fn ict_expression_sequences() {
-    let mut names = vec!["generic_neutral_mesh".to_string()];
-    names.extend(ICT.iter().map(|e| e.to_string()));
-    let paths: Option<Vec<_>> = names
-        .iter()
-        .map(|n| common::data_file(&format!("ict-facekit/{n}.obj.gz")))
-        .collect();
-    let Some(paths) = paths else {
+    let Some(paths) = common::ict_rig_paths() else {
         return common::skip("ict_expression_sequences");
     };
     let s = read_shape_set(&paths).unwrap();
@@ -90,7 +71,8 @@ fn ict_expression_sequences() {
     // eyelash cards (114); the two 24-vertex eye pieces are bands too but move in no
     // expression, so they are fixed instead.
     assert_eq!(solver.summary().band_vertices, 2 * 152 + 2 * 204 + 12 * 114);
-    for (k, e) in ICT.iter().enumerate() {
-        assert_holds(e, &check_sequence(e, &mut solver, ICT.len(), k, 36));
+    let ict = common::ICT_EXPRESSIONS;
+    for (k, e) in ict.iter().enumerate() {
+        assert_holds(e, &check_sequence(e, &mut solver, ict.len(), k, 36));
     }
 }

@@ -20,18 +20,7 @@ use nalgebra::{Rotation3, Vector3};
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-const EXPRESSIONS: [&str; 10] = [
-    "browInnerUp_L",
-    "cheekPuff_L",
-    "eyeBlink_L",
-    "eyeBlink_R",
-    "jawLeft",
-    "jawOpen",
-    "mouthFunnel",
-    "mouthPucker",
-    "mouthSmile_L",
-    "mouthSmile_R",
-];
+use common::ICT_EXPRESSIONS as EXPRESSIONS;
 
 /// Midpoint subdivision: vertex ids `0..#V` are the original vertices, then one vertex per edge.
 fn subdivide(m: &TriMesh) -> TriMesh {

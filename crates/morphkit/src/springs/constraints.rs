@@ -499,6 +499,15 @@ mod tests {
     use super::*;
     use crate::mesh::generate;
 
+    /// The constraints of `spec` on `s` with topology `t`, no kinematic vertices or bands.
+    fn resolve(
+        s: &ShapeSet,
+        t: &Topology,
+        spec: &FixedVertices,
+    ) -> Result<Constraints, BlendError> {
+        Constraints::new(s, &Components::of_topology(t), spec, &[], &[])
+    }
+
     fn set_of(m: &crate::mesh::TriMesh, other: Vec<Point>) -> ShapeSet {
         ShapeSet::new(
             m.clone(),
@@ -515,25 +524,11 @@ mod tests {
             generate::rotate(&m.positions, [0.0; 3], [0.0, 0.0, 1.0], 1.0),
         );
         let t = Topology::new(m.num_vertices(), &m.triangles);
-        let c = Constraints::new(
-            &s,
-            &Components::of_topology(&t),
-            &FixedVertices::None,
-            &[],
-            &[],
-        )
-        .unwrap();
+        let c = resolve(&s, &t, &FixedVertices::None).unwrap();
         assert_eq!(c.fixed_dof.iter().filter(|f| **f).count(), 6);
         assert_eq!(c.gauges.len(), 1);
         // Auto finds the two poles on the rotation axis: collinear, so ignored.
-        let c = Constraints::new(
-            &s,
-            &Components::of_topology(&t),
-            &FixedVertices::Auto,
-            &[],
-            &[],
-        )
-        .unwrap();
+        let c = resolve(&s, &t, &FixedVertices::Auto).unwrap();
         assert_eq!(c.fixed_dof.iter().filter(|f| **f).count(), 6);
         assert!(c.fixed.is_empty());
     }
@@ -543,33 +538,12 @@ mod tests {
         let m = generate::tube(0.5, 4.0, 8, 8, false);
         let s = set_of(&m, generate::bend(&m.positions, 2.0, 2.0, 1.5));
         let t = Topology::new(m.num_vertices(), &m.triangles);
-        let c = Constraints::new(
-            &s,
-            &Components::of_topology(&t),
-            &FixedVertices::Auto,
-            &[],
-            &[],
-        )
-        .unwrap();
+        let c = resolve(&s, &t, &FixedVertices::Auto).unwrap();
         assert_eq!(c.fixed.len(), 5 * 8, "rings at x ≤ 2 do not move");
         assert!(c.gauges.is_empty());
-        let e = Constraints::new(
-            &s,
-            &Components::of_topology(&t),
-            &FixedVertices::Ids(vec![0, 8]),
-            &[],
-            &[],
-        )
-        .unwrap_err();
+        let e = resolve(&s, &t, &FixedVertices::Ids(vec![0, 8])).unwrap_err();
         assert!(matches!(e, BlendError::UnderConstrained { fixed: 2, .. }));
-        let e = Constraints::new(
-            &s,
-            &Components::of_topology(&t),
-            &FixedVertices::Ids(vec![0, 9999]),
-            &[],
-            &[],
-        )
-        .unwrap_err();
+        let e = resolve(&s, &t, &FixedVertices::Ids(vec![0, 9999])).unwrap_err();
         assert!(matches!(
             e,
             BlendError::FixedOutOfRange { vertex: 9999, .. }

@@ -30,8 +30,9 @@
 //! horse ↔ horse-05 5.83 → 3.53, ICT ↔ jawOpen 10.0 → 5.72, bent tubes about 2 → 0.94;
 //! factorizations 3.42 → 1.47 and 7.00 → 3.17. On the ten horse poses and ten ICT
 //! expressions at α = 0.1, 0.4, 0.6, 0.9 both starts reach the same minimum within
-//! 1e-8–1e-4 of the diagonal, except ICT eyeBlink_L/R at 0.6, where a thin eye strip has
-//! two minima (see the README).
+//! 1e-8–1e-4 of the diagonal, except ICT eyeBlink_L/R at 0.6, where a thin eye strip had
+//! two minima (measured before thin bands followed the predictor,
+//! [`BlendOptions::thin_band_rings`](super::BlendOptions::thin_band_rings); see the README).
 
 use super::blender::{FrameSolver, Rig, Start};
 use super::newton::Workspace;

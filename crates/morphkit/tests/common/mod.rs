@@ -29,6 +29,29 @@ pub fn data_file(rel: &str) -> Option<PathBuf> {
     Some(p)
 }
 
+/// The ten ICT FaceKit expressions under `ict-facekit/`, in the rigs' target order.
+pub const ICT_EXPRESSIONS: [&str; 10] = [
+    "browInnerUp_L",
+    "cheekPuff_L",
+    "eyeBlink_L",
+    "eyeBlink_R",
+    "jawLeft",
+    "jawOpen",
+    "mouthFunnel",
+    "mouthPucker",
+    "mouthSmile_L",
+    "mouthSmile_R",
+];
+
+/// The ICT rig's files: the neutral head, then [`ICT_EXPRESSIONS`]; `None` when
+/// `MORPHKIT_DATA` is unset.
+pub fn ict_rig_paths() -> Option<Vec<PathBuf>> {
+    std::iter::once("generic_neutral_mesh")
+        .chain(ICT_EXPRESSIONS)
+        .map(|n| data_file(&format!("ict-facekit/{n}.obj.gz")))
+        .collect()
+}
+
 /// Prints why a real-data test did nothing.
 pub fn skip(test: &str) {
     eprintln!("{test}: MORPHKIT_DATA is unset; skipping the real-data test");
