@@ -351,8 +351,8 @@ pub fn thin_bands(topology: &Topology, components: &Components, rings: usize) ->
         depth[c] = depth[c].max(dist[v]);
     }
     let is_band = |c: usize| {
-        let width = 2 * depth[c] + 1;
-        depth[c] <= rings && size[c] >= 3 && size[c] >= 2 * width * width
+        // `depth` is usize::MAX beyond `rings`: test it before any arithmetic on it.
+        depth[c] <= rings && size[c] >= 3 && size[c] >= 2 * (2 * depth[c] + 1).pow(2)
     };
     (0..n as u32)
         .filter(|&v| is_band(components.label[v as usize] as usize))
