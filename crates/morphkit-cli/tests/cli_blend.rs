@@ -235,3 +235,39 @@ fn factor_precision_changes_the_speed_not_the_answer() {
     let e = fails(&refs(&args(&bad_out, "half")));
     assert!(e.contains("factor-precision"), "{e}");
 }
+
+/// A short open tube, 3 rings of 40 vertices, is a thin band: `--report` counts its moving
+/// vertices (the bottom ring does not move and is fixed) as band vertices, and
+/// `--thin-band-rings 0` solves it as springs instead.
+#[test]
+fn a_thin_band_follows_the_predictor_unless_turned_off() {
+    let d = tmp_dir("blend-band");
+    let (base, target) = (d.join("ring.obj"), d.join("bent.obj"));
+    write_tube(&base, 40, 3, 1.0, 0.0);
+    write_tube(&target, 40, 3, 1.0, 1.0);
+    let bands = |rings: &str| {
+        let (out, report) = (
+            d.join(format!("out{rings}.obj")),
+            d.join(format!("r{rings}.json")),
+        );
+        ok(&blend_args(
+            &base,
+            &target,
+            &[
+                "--alpha",
+                "0.4",
+                "--thin-band-rings",
+                rings,
+                "--out",
+                s(&out),
+                "--report",
+                s(&report),
+            ],
+        ));
+        let r: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        r["rig"]["band_vertices"].as_u64().unwrap()
+    };
+    assert_eq!(bands("4"), 80);
+    assert_eq!(bands("0"), 0);
+}
