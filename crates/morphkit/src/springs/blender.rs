@@ -63,10 +63,9 @@ impl BlendPredictor {
     /// equals each shape exactly at its one-hot weights and costs one prefactored solve, so it
     /// can follow a slider while the equilibrium is computed (a preview, not the equilibrium).
     pub fn predict(&self, weights: &Weights) -> Result<Vec<crate::mesh::Point>, BlendError> {
-        let c = weights.coefficients(self.rig.shapes.len())?;
-        let lin = predictor::linear(&self.rig.shapes, &c);
-        let x = self.rig.start(&c, &lin, None);
-        Ok(predictor::output(&self.rig.constraints, &x, &lin))
+        Ok(self
+            .rig
+            .predicted(&weights.coefficients(self.rig.shapes.len())?))
     }
 }
 
@@ -447,35 +446,46 @@ impl FrameSolver<'_> {
 }
 
 impl Rig {
+    /// The rotation-aware prediction for coefficients `c` (world coordinates, fixed vertices
+    /// at `lin`, the linear blend), or `None` where the linear blend is the predictor.
+    fn rotation_prediction(&self, c: &[f64], lin: &[Point]) -> Option<Vec<Point>> {
+        self.rotation.as_ref()?.predict(c, lin, &self.is_fixed)
+    }
+
     /// Where a solve starts, in solver coordinates: `start_from` (with fixed vertices at
-    /// their linear blend and thin bands at the predictor) when given, else the predictor
-    /// $P(c)$.
-    pub(super) fn start(
+    /// their linear blend `lin` and thin bands at `rotated`) when given, else the predictor:
+    /// `rotated` ([`rotation_prediction`](Self::rotation_prediction)) or `lin`.
+    fn start(
         &self,
-        c: &[f64],
-        lin: &[crate::mesh::Point],
-        start_from: Option<&[crate::mesh::Point]>,
+        lin: &[Point],
+        rotated: Option<&[Point]>,
+        start_from: Option<&[Point]>,
     ) -> Vec<f64> {
-        let bands = &self.constraints.bands;
-        let predicted = match (start_from, &self.rotation) {
-            (Some(_), _) if bands.is_empty() => None,
-            (_, Some(r)) => r.predict(c, lin, &self.is_fixed),
-            (_, None) => None,
-        };
-        let predicted = predicted.as_deref();
-        let mut x = predictor::predict(&self.constraints, start_from.or(predicted).unwrap_or(lin));
+        let predicted = rotated.unwrap_or(lin);
+        let mut x = predictor::predict(&self.constraints, start_from.unwrap_or(predicted));
         if start_from.is_some() {
             for &v in &self.constraints.fixed {
                 let v = v as usize;
                 x[3 * v..3 * v + 3].copy_from_slice(&lin[v]);
             }
-            let held = predicted.unwrap_or(lin);
-            for &v in bands {
+            for &v in &self.constraints.bands {
                 let v = v as usize;
-                x[3 * v..3 * v + 3].copy_from_slice(&held[v]);
+                x[3 * v..3 * v + 3].copy_from_slice(&predicted[v]);
             }
         }
         x
+    }
+
+    /// The predictor $P$ in world coordinates, from the linear blend and the rotation-aware
+    /// prediction of the same coefficients.
+    fn world_prediction(&self, lin: &[Point], rotated: Option<&[Point]>) -> Vec<Point> {
+        predictor::output(&self.constraints, &self.start(lin, rotated, None), lin)
+    }
+
+    /// The predictor $P(c)$ in world coordinates.
+    pub(super) fn predicted(&self, c: &[f64]) -> Vec<Point> {
+        let lin = predictor::linear(&self.shapes, c);
+        self.world_prediction(&lin, self.rotation_prediction(c, &lin).as_deref())
     }
 
     fn check_targets(&self, targets: &[PointTarget]) -> Result<(), BlendError> {
@@ -516,6 +526,12 @@ impl Rig {
     ) -> Result<BlendResult, BlendError> {
         let start = Instant::now();
         self.check_targets(targets)?;
+        let lin = predictor::linear(&self.shapes, c);
+        // One Poisson solve per frame: a given start needs the prediction only for the bands.
+        let rotated = match from {
+            Start::From(_) if self.constraints.bands.is_empty() => None,
+            _ => self.rotation_prediction(c, &lin),
+        };
         let corrected;
         let start_from = match from {
             Start::From(p) => Some(p),
@@ -523,7 +539,8 @@ impl Rig {
             Start::Canonical if !self.options.sampled_start => None,
             Start::Canonical => {
                 let correction = self.samples.correction(c, &mut Sampler { rig: self, ws });
-                corrected = correction.map(|d| shifted(self.predicted(c), &d, 1.0));
+                corrected = correction
+                    .map(|d| shifted(self.world_prediction(&lin, rotated.as_deref()), &d, 1.0));
                 corrected.as_deref()
             }
         };
@@ -546,8 +563,7 @@ impl Rig {
             terms.push(&points);
             params.push(TermParameters::default());
         }
-        let lin = predictor::linear(&self.shapes, c);
-        let mut x = self.start(c, &lin, start_from);
+        let mut x = self.start(&lin, rotated.as_deref(), start_from);
         let mut stats = FrameStats {
             gradient_tolerance: self.tolerance,
             clamped_springs: params.iter().map(|p| p.clamped).sum(),

@@ -39,11 +39,12 @@ pub struct BlendOptions {
     pub kinematic_stretch: f64,
     /// Components every vertex of which lies within this many mesh edges of the boundary, and
     /// at least twice as long as wide, are *thin bands* ([`thin_bands`](super::thin_bands)):
-    /// strips and cards such as a face rig's eye-occlusion strips, tear films and eyelashes. They have no material across
-    /// their width, buckle under the blended rest lengths and snap between frames, so they
-    /// follow the predictor $P(w)$ as boundary conditions. `0` turns this off. Default `4`
-    /// (a band up to about 9 edges across): the ICT head's strips are 3–4 rings wide, its
-    /// mouth socket 16, its face 89; the horse, the camel and the closed meshes have none.
+    /// strips and cards such as a face rig's eye-occlusion strips, tear films and eyelashes.
+    /// They have no material across their width, buckle under the blended rest lengths and
+    /// snap between frames, so they follow the predictor $P(w)$ as boundary conditions. `0`
+    /// turns this off. Default `4` (a band up to about 9 edges across): the ICT head's strips
+    /// and cards are 1–4 rings wide, its mouth socket 16, its face 89; the horse, the camel
+    /// and the closed meshes have none.
     pub thin_band_rings: usize,
     /// Armijo sufficient-decrease constant of the [`LinearSolver::Direct`] line search.
     /// Default `1e-4`.

@@ -36,7 +36,7 @@
 
 use super::blender::{FrameSolver, Rig, Start};
 use super::newton::Workspace;
-use super::{predictor, PhysicalBlend, Weights};
+use super::{PhysicalBlend, Weights};
 use crate::mesh::Point;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock};
@@ -223,12 +223,6 @@ impl Rig {
         c[0] = 1.0 - a;
         c[s] = a;
         c
-    }
-
-    /// The predictor $P(c)$ in world coordinates.
-    pub(super) fn predicted(&self, c: &[f64]) -> Vec<Point> {
-        let lin = predictor::linear(&self.shapes, c);
-        predictor::output(&self.constraints, &self.start(c, &lin, None), &lin)
     }
 }
 
