@@ -7,7 +7,8 @@ mod common;
 
 use morphkit::mesh::{bbox_diagonal, generate, Point, ShapeSet, Topology, TriMesh};
 use morphkit::springs::{
-    fold_metrics, linear_blend, BlendError, BlendOptions, FixedVertices, PhysicalBlend, Weights,
+    fold_metrics, linear_blend, sequence_continuity, BlendError, BlendOptions, FixedVertices,
+    PhysicalBlend, Weights, JUMP_BOUND,
 };
 
 fn dist(a: Point, b: Point) -> f64 {
@@ -211,14 +212,16 @@ fn sequences_are_continuous_without_flying_parts() {
                 r.positions
             })
             .collect();
-        let linear_step = max_dist(s.positions(0), s.positions(1)) / (n - 1) as f64;
-        for k in 1..n {
-            let step = max_dist(&frames[k], &frames[k - 1]);
-            assert!(
-                step <= 4.0 * linear_step,
-                "frame {k}: step {step}, linear step {linear_step}"
-            );
-        }
+        let linear: Vec<Vec<Point>> = weights
+            .iter()
+            .map(|w| linear_blend(&s, w).unwrap())
+            .collect();
+        let c = sequence_continuity(&frames, &linear, JUMP_BOUND, s.base().bbox_diagonal());
+        assert!(c.jumps.is_empty(), "{c:?}");
+        assert!(
+            c.worst_ratio >= 1.0,
+            "a bend moves at least as fast as a chord: {c:?}"
+        );
         for (k, f) in frames.iter().enumerate() {
             let q = fold_metrics(&s, &topo, &weights[k], f).unwrap();
             assert!(

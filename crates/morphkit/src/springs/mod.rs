@@ -62,10 +62,13 @@
 //! - `predictor`, `system`, `newton`, `blender`: the predictor and output alignment, the
 //!   free-coordinate Newton system, the iterations, and [`PhysicalBlend`] / [`blend`];
 //! - [`metrics`]: edge-length, area, volume, fold and crease measures against
-//!   [`linear_blend`].
+//!   [`linear_blend`];
+//! - [`continuity`]: jumps between consecutive frames of a sequence ([`ContinuityCheck`]),
+//!   where the energy has two equilibria and a part snaps from one to the other.
 
 mod blender;
 mod constraints;
+pub mod continuity;
 pub mod interior;
 pub mod metrics;
 mod newton;
@@ -84,6 +87,7 @@ pub use blender::{blend, BlendPredictor, FrameSolver, PhysicalBlend};
 pub use constraints::{
     stretched_vertices, thin_bands, Components, Constraints, FixedVertices, Gauge,
 };
+pub use continuity::{sequence_continuity, Continuity, ContinuityCheck, Jump, JUMP_BOUND};
 pub use interior::{
     AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions, SurfacePredictor,
     VolumetricBlend,
