@@ -31,6 +31,10 @@ def write_animation(
     path: PathLike, frames: Union[ArrayLike, Sequence[ArrayLike]], f: ArrayLike, fps: float = 24.0
 ) -> None: ...
 def metrics(v_rest: ArrayLike, v: ArrayLike, f: ArrayLike) -> Dict[str, Any]: ...
+def continuity(
+    frames: ArrayLike, linear: ArrayLike, bound: float = 4.0
+) -> Dict[str, Any]: ...
+
 
 class PhysicalBlend:
     def __init__(

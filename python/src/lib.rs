@@ -26,6 +26,7 @@ fn _morphkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(io::read_animation, m)?)?;
     m.add_function(wrap_pyfunction!(io::write_animation, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::metrics, m)?)?;
+    m.add_function(wrap_pyfunction!(metrics::continuity, m)?)?;
     m.add_function(wrap_pyfunction!(synth::flexibility, m)?)?;
     m.add_function(wrap_pyfunction!(synth::geodesic_distance, m)?)?;
     m.add_function(wrap_pyfunction!(synth::synthesize, m)?)?;

@@ -55,3 +55,44 @@ pub fn metrics<'py>(
     d.set_item("creases", fm.creases)?;
     Ok(d)
 }
+
+/// Finds where a sequence jumps: pairs of consecutive frames between which some vertex moved
+/// more than `bound` × the linear blend's largest step between the same weights (a part that
+/// snapped from one equilibrium of the spring energy to another; see the README, "Jumps
+/// between frames"). `frames` and `linear` are `(k, n, 3)` arrays (or sequences of `(n, 3)`
+/// arrays): the physical frames and the linear blends of the same weights, in sequence order.
+/// Linear steps below 1e-6 × the bounding-box diagonal of `linear[0]` count as that floor.
+/// Returns a dict: `bound`, `worst_ratio`, `worst_frames` (`[k - 1, k]` or `None`) and
+/// `jumps`, a list of dicts with `frames`, `ratio`, `vertex` (the one that moved most) and
+/// `vertices` (every vertex above the bound).
+///
+/// >>> morphkit.continuity(frames, linear)["jumps"]
+#[pyfunction]
+#[pyo3(signature = (frames, linear, bound = morphkit::springs::JUMP_BOUND))]
+pub fn continuity<'py>(
+    py: Python<'py>,
+    frames: &Bound<'py, PyAny>,
+    linear: &Bound<'py, PyAny>,
+    bound: f64,
+) -> PyResult<Bound<'py, PyAny>> {
+    if !(bound.is_finite() && bound > 0.0) {
+        return Err(new_err(
+            Kind::Blend,
+            format!("bound: must be a finite positive number, got {bound}"),
+        ));
+    }
+    let lin = arrays::frames("linear", linear, None)?;
+    let n = lin.first().map(Vec::len);
+    let x = arrays::frames("frames", frames, n)?;
+    if x.len() != lin.len() {
+        return Err(new_err(
+            Kind::Mesh,
+            format!("frames: has {} frames, linear has {}", x.len(), lin.len()),
+        ));
+    }
+    let diagonal = lin
+        .first()
+        .map_or(0.0, |l| morphkit::mesh::bbox_diagonal(l));
+    let c = py.detach(|| morphkit::springs::sequence_continuity(&x, &lin, bound, diagonal));
+    to_dict(py, &c)
+}

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import morphkit
-from conftest import grid, tube
+from conftest import bend, grid, tube
 
 
 def closed_box():
@@ -49,3 +49,39 @@ def test_area_strain_matches_libigl():
     a1 = igl.doublearea(X, F) / 2
     expected = float(np.sqrt(np.mean((a1 / a0 - 1) ** 2)))
     assert morphkit.metrics(V, X, F)["area_rms"] == pytest.approx(expected, rel=1e-9)
+
+
+def test_continuity_of_a_physical_sequence():
+    """A bent tube's 24 frames move smoothly: no jump, and its fastest vertex moves at least as
+    fast as the linear blend's (an arc is longer than its chord)."""
+    from conftest import bend
+
+    V, F = tube()
+    B = bend(V, 2.0)
+    b = morphkit.PhysicalBlend(V, [B], F)
+    alphas = np.linspace(0.0, 1.0, 24)
+    frames = b.solve_many([[a] for a in alphas], threads=2)
+    linear = [(1 - a) * V + a * B for a in alphas]
+    c = morphkit.continuity(frames, linear)
+    assert c["bound"] == 4.0 and c["jumps"] == []
+    assert 1.0 <= c["worst_ratio"] < 4.0, c["worst_ratio"]
+    assert c["worst_frames"][1] == c["worst_frames"][0] + 1
+
+
+def test_continuity_finds_a_part_that_snaps():
+    V = np.array([[float(i), 0.0, 0.0] for i in range(10)])
+    linear = np.stack([V + [0.1 * k, 0, 0] for k in range(6)])
+    frames = linear.copy()
+    frames[3:, [3, 4], 1] += 1.0  # two vertices swing out between frames 2 and 3
+    c = morphkit.continuity(frames, linear)
+    assert len(c["jumps"]) == 1
+    j = c["jumps"][0]
+    assert j["frames"] == [2, 3] and j["vertices"] == [3, 4] and j["vertex"] in (3, 4)
+    assert j["ratio"] == pytest.approx(np.hypot(1.0, 0.1) / 0.1)
+    assert morphkit.continuity(frames, linear, bound=20.0)["jumps"] == []
+    with pytest.raises(morphkit.MeshError, match="frames"):
+        morphkit.continuity(frames[:4], linear)
+    with pytest.raises(morphkit.MeshError, match="vertices"):
+        morphkit.continuity(frames[:, :5], linear)
+    with pytest.raises(morphkit.MorphkitError, match="bound"):
+        morphkit.continuity(frames, linear, bound=-1.0)

@@ -271,3 +271,63 @@ fn a_thin_band_follows_the_predictor_unless_turned_off() {
     assert_eq!(bands("4"), 80);
     assert_eq!(bands("0"), 0);
 }
+
+/// A sequence in which a part snaps from one equilibrium to another is reported: a warning,
+/// the pair of frames and the region in `--report`, and the region red in a PLY beside the
+/// output. The squashed strip snaps when solved as springs (`--thin-band-rings 0`) and moves
+/// smoothly as a thin band (the default), which then reports nothing.
+#[test]
+fn a_jump_between_frames_is_reported_with_its_region() {
+    let d = tmp_dir("blend-jump");
+    let (base, target) = (d.join("open.obj"), d.join("closed.obj"));
+    write_annulus(&base, 1.0);
+    write_annulus(&target, 0.05);
+    let run = |rings: &str| {
+        let (out, report) = (
+            d.join(format!("seq{rings}.pc2")),
+            d.join(format!("r{rings}.json")),
+        );
+        let (_, err) = run_ok(&blend_args(
+            &base,
+            &target,
+            &[
+                "--frames",
+                "36",
+                "--thin-band-rings",
+                rings,
+                "--out",
+                s(&out),
+                "--report",
+                s(&report),
+            ],
+        ));
+        let r: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        (err, r, d.join(format!("seq{rings}-jumps.ply")))
+    };
+    let (err, r, ply) = run("0");
+    let c = &r["continuity"];
+    let jumps = c["jumps"].as_array().unwrap();
+    assert!(!jumps.is_empty(), "{c}");
+    assert!(err.contains("jumped"), "{err}");
+    assert!(c["worst_ratio"].as_f64().unwrap() > 4.0, "{c}");
+    assert_eq!(c["bound"].as_f64(), Some(4.0));
+    for j in jumps {
+        let f = j["frames"].as_array().unwrap();
+        assert_eq!(f[1].as_u64().unwrap(), f[0].as_u64().unwrap() + 1, "{j}");
+        let v = j["vertices"].as_array().unwrap();
+        assert!(!v.is_empty() && v.len() <= 480, "{j}");
+        assert!(v.contains(&j["vertex"]), "{j}");
+        assert!(j["ratio"].as_f64().unwrap() > 4.0, "{j}");
+    }
+    assert_eq!(r["jump_region"].as_str(), Some(s(&ply)));
+    let text = std::fs::read(&ply).unwrap();
+    assert!(text.starts_with(b"ply"), "not a PLY: {}", ply.display());
+    let (err, r, ply) = run("4");
+    let c = &r["continuity"];
+    assert!(c["jumps"].as_array().unwrap().is_empty(), "{c}");
+    assert!(c["worst_ratio"].as_f64().unwrap() < 2.0, "{c}");
+    assert!(!err.contains("jumped"), "{err}");
+    assert!(r["jump_region"].is_null());
+    assert!(!ply.exists());
+}

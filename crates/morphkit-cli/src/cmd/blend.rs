@@ -9,15 +9,16 @@
 //! - `--weights-file F`: one weight vector per frame, JSON (`{"frames": [[…], …]}` or a bare
 //!   array of arrays) or CSV (one row per frame; `#` comments and a non-numeric header skipped).
 
-use crate::outputs::{is_frame_dir, Kind, Plan};
+use crate::outputs::{is_frame_dir, Kind, Outputs, Plan};
 use crate::util::{check_fps, check_positive, progress, read_json};
 use crate::weights::{self, Origin};
 use anyhow::{bail, Context};
 use morphkit::io::{self, FramesOptions};
 use morphkit::mesh::{ShapeSet, Topology};
 use morphkit::springs::{
-    blend_metrics, fold_metrics, linear_blend, BlendOptions, BlendResult, FixedVertices,
-    HingeOptions, PhysicalBlend, Precision, SpringOptions, Weights,
+    blend_metrics, fold_metrics, linear_blend, BlendOptions, BlendResult, Continuity,
+    ContinuityCheck, FixedVertices, HingeOptions, PhysicalBlend, Precision, SpringOptions, Weights,
+    JUMP_BOUND,
 };
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -232,6 +233,55 @@ pub(super) fn unconverged_path(out: &Path) -> PathBuf {
     out.with_file_name(format!("{stem}-unconverged.ply"))
 }
 
+/// Where the vertices of jumps between frames are shown, beside the output.
+pub(super) fn jumps_path(out: &Path) -> PathBuf {
+    let p = unconverged_path(out);
+    let name = p
+        .file_name()
+        .map(|n| n.to_string_lossy().replace("-unconverged", "-jumps"));
+    p.with_file_name(name.unwrap_or_else(|| "blend-jumps.ply".into()))
+}
+
+/// Warns about the jumps of a sequence (a part that snapped from one equilibrium to another
+/// between two frames, see `morphkit::springs::continuity`) and writes their vertices, red on
+/// the base mesh, to [`jumps_path`]. Returns that path when anything jumped.
+pub(super) fn report_jumps(
+    outputs: &mut Outputs,
+    out: &Path,
+    base: &morphkit::mesh::TriMesh,
+    continuity: &Continuity,
+) -> anyhow::Result<Option<PathBuf>> {
+    let Some(first) = continuity.jumps.first() else {
+        return Ok(None);
+    };
+    let worst = continuity
+        .jumps
+        .iter()
+        .max_by(|a, b| a.ratio.total_cmp(&b.ratio))
+        .unwrap_or(first);
+    let region = continuity.jump_vertices();
+    let path = jumps_path(out);
+    eprintln!(
+        "warning: a part jumped between {} pair(s) of consecutive frames (first: frames {}→{}; worst: frames {}→{}, {} vertices moving up to {:.1}× the linear blend's step, bound {}); the spring energy has two equilibria there and the frames pass from one to the other. {} vertices shown red in {}; try --hinge-weight 1 (see the README, \"Jumps between frames\")",
+        continuity.jumps.len(),
+        first.frames[0],
+        first.frames[1],
+        worst.frames[0],
+        worst.frames[1],
+        worst.vertices.len(),
+        worst.ratio,
+        continuity.bound,
+        region.len(),
+        path.display()
+    );
+    let mut colors = vec![[200, 200, 200]; base.positions.len()];
+    for &v in &region {
+        colors[v as usize] = [220, 30, 30];
+    }
+    outputs.colored_ply(&path, base, &io::Colors::PerVertex(colors))?;
+    Ok(Some(path))
+}
+
 /// Solves every frame (`None` per frame for the linear blend), in parallel chunks so that the
 /// progress bar moves.
 fn solve_frames(
@@ -286,6 +336,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         .output("--out", &a.out, Kind::MeshOrAnimation)
         .output_opt("--report", a.report.as_ref(), Kind::Json)
         .output("OUT-unconverged.ply", &unconverged_path(&a.out), Kind::Mesh)
+        .output("OUT-jumps.ply", &jumps_path(&a.out), Kind::Mesh)
         .check()?;
     crate::util::announce_reading(&inputs);
     let shapes = io::read_shape_set(&inputs)?;
@@ -354,6 +405,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let mut unconverged = Vec::new();
     let mut failed = vec![false; shapes.num_vertices()];
     let mut clamped = Vec::new();
+    let mut steps = ContinuityCheck::new(JUMP_BOUND, shapes.base().bbox_diagonal());
     for (k, (w, r)) in weights.iter().zip(results).enumerate() {
         let linear = linear_blend(&shapes, w)?;
         let mut row = json!({ "frame": k, "weights": weights_json(w) });
@@ -377,6 +429,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
                     row["folds"] = json!(fold_metrics(&shapes, &topology, w, &r.positions)?);
                 }
                 row["solver"] = json!(r.stats);
+                steps.push(&r.positions, &linear);
                 r.positions
             }
         };
@@ -403,6 +456,8 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
             .collect();
         outputs.colored_ply(path, shapes.base(), &io::Colors::PerVertex(colors))?;
     }
+    let continuity = steps.finish();
+    let jumps_ply = report_jumps(&mut outputs, &a.out, shapes.base(), &continuity)?;
     if let Some(&(_, most)) = clamped.iter().max_by_key(|c| c.1) {
         eprintln!(
             "warning: extreme weights clamped the rest lengths of up to {most} springs in {} of {} frames (first: frame {}); see --report",
@@ -441,6 +496,8 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
             "threads": threads,
             "unconverged_frames": unconverged,
             "unconverged_region": failed_ply.as_ref().map(|p| p.display().to_string()),
+            "continuity": (!a.linear).then_some(&continuity),
+            "jump_region": jumps_ply.as_ref().map(|p| p.display().to_string()),
             "timings": { "setup_seconds": setup_seconds, "write_seconds": write_seconds, "total_seconds": start.elapsed().as_secs_f64() },
             "frames": rows,
         });

@@ -13,7 +13,7 @@
 //! - `--anchor auto|x,y,z[,size]`: a small stiff cube inside the base whose vertices are the
 //!   boundary conditions; the result follows its slerp-interpolated rigid motion.
 
-use super::blend::{unconverged_path, weights_json, BlendArgs};
+use super::blend::{report_jumps, unconverged_path, weights_json, BlendArgs};
 use crate::outputs::Outputs;
 use crate::util::progress;
 use anyhow::{bail, Context};
@@ -85,6 +85,10 @@ pub fn run(
     let mut rows = Vec::with_capacity(results.len());
     let mut unconverged = Vec::new();
     let mut failed = vec![false; shapes.num_vertices()];
+    let mut steps = morphkit::springs::ContinuityCheck::new(
+        morphkit::springs::JUMP_BOUND,
+        shapes.base().bbox_diagonal(),
+    );
     let (mut worst_tets, mut worst_tris) = (0, 0);
     for (k, (w, r)) in weights.iter().zip(results).enumerate() {
         if !r.stats.converged {
@@ -99,8 +103,9 @@ pub fn run(
             "frame": k, "weights": weights_json(w), "solver": r.stats,
             "inversions": r.inversions,
         });
+        let lin = morphkit::springs::linear_blend(shapes, w)?;
+        steps.push(&r.positions, &lin);
         if a.report.is_some() {
-            let lin = morphkit::springs::linear_blend(shapes, w)?;
             row["linear"] = json!(blend_metrics(shapes, &topology, w, &lin)?);
             row["physical"] = json!(blend_metrics(shapes, &topology, w, &r.positions)?);
             if let Some(t) = &r.anchor_motion {
@@ -117,6 +122,8 @@ pub fn run(
     if worst_tets + worst_tris > 0 {
         eprintln!("note: element inversion (Ma et al. Sec. 5): up to {worst_tets} interior tetrahedra and {worst_tris} surface triangles flipped against the linear blend in a frame (see --report)");
     }
+    let continuity = steps.finish();
+    let jumps_ply = report_jumps(&mut outputs, &a.out, shapes.base(), &continuity)?;
     let failed_ply = (!unconverged.is_empty()).then(|| unconverged_path(&a.out));
     if let Some(path) = &failed_ply {
         eprintln!(
@@ -156,6 +163,8 @@ pub fn run(
             "threads": threads,
             "unconverged_frames": unconverged,
             "unconverged_region": failed_ply.as_ref().map(|p| p.display().to_string()),
+            "continuity": continuity,
+            "jump_region": jumps_ply.as_ref().map(|p| p.display().to_string()),
             "timings": { "setup_seconds": setup_seconds, "total_seconds": start.elapsed().as_secs_f64() },
             "frames": rows,
         });

@@ -79,6 +79,31 @@ pub fn write_tube(path: &std::path::Path, nu: usize, nv: usize, scale: f64, bend
     std::fs::write(path, text).unwrap();
 }
 
+/// An annulus of 3 rings of 160 vertices (radii 0.85…1.15) lying on a sphere of radius 1.5,
+/// squashed in y by `squash` (1: as made), as an eye-occlusion strip over an eyeball that
+/// closes (the library's `tests/springs_bands.rs` case, without its bar).
+pub fn write_annulus(path: &std::path::Path, squash: f64) {
+    let cap = |x: f64, y: f64| (2.25 - x * x - y * y).sqrt();
+    let (rows, around) = (3usize, 160usize);
+    let mut text = String::new();
+    for i in 0..rows {
+        let r = 0.85 + 0.3 * i as f64 / (rows - 1) as f64;
+        for j in 0..around {
+            let t = std::f64::consts::TAU * j as f64 / around as f64;
+            let (x, y) = (r * t.cos(), squash * r * t.sin());
+            text += &format!("v {x} {y} {}\n", cap(x, y));
+        }
+    }
+    let id = |i: usize, j: usize| i * around + j % around + 1;
+    for i in 0..rows - 1 {
+        for j in 0..around {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            text += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
+        }
+    }
+    std::fs::write(path, text).unwrap();
+}
+
 /// `blend --base BASE --target TARGET` followed by `rest`.
 pub fn blend_args<'a>(base: &'a Path, target: &'a Path, rest: &[&'a str]) -> Vec<&'a str> {
     let mut v = vec!["blend", "--base", s(base), "--target", s(target)];
