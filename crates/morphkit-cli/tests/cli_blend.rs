@@ -236,6 +236,30 @@ fn factor_precision_changes_the_speed_not_the_answer() {
     assert!(e.contains("factor-precision"), "{e}");
 }
 
+/// Runs `blend` on `base` → `target` with the `extra` arguments and `--thin-band-rings rings`,
+/// writing `out` and the report `report`; returns stderr and the report.
+fn blend_rings(
+    base: &Path,
+    target: &Path,
+    extra: &[&str],
+    rings: &str,
+    out: &Path,
+    report: &Path,
+) -> (String, serde_json::Value) {
+    let mut args = extra.to_vec();
+    args.extend([
+        "--thin-band-rings",
+        rings,
+        "--out",
+        s(out),
+        "--report",
+        s(report),
+    ]);
+    let (_, err) = run_ok(&blend_args(base, target, &args));
+    let r = serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
+    (err, r)
+}
+
 /// A short open tube, 3 rings of 40 vertices, is a thin band: `--report` counts its moving
 /// vertices (the bottom ring does not move and is fixed) as band vertices, and
 /// `--thin-band-rings 0` solves it as springs instead.
@@ -250,23 +274,10 @@ fn a_thin_band_follows_the_predictor_unless_turned_off() {
             d.join(format!("out{rings}.obj")),
             d.join(format!("r{rings}.json")),
         );
-        ok(&blend_args(
-            &base,
-            &target,
-            &[
-                "--alpha",
-                "0.4",
-                "--thin-band-rings",
-                rings,
-                "--out",
-                s(&out),
-                "--report",
-                s(&report),
-            ],
-        ));
-        let r: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
-        r["rig"]["band_vertices"].as_u64().unwrap()
+        blend_rings(&base, &target, &["--alpha", "0.4"], rings, &out, &report).1["rig"]
+            ["band_vertices"]
+            .as_u64()
+            .unwrap()
     };
     assert_eq!(bands("4"), 80);
     assert_eq!(bands("0"), 0);
@@ -287,22 +298,7 @@ fn a_jump_between_frames_is_reported_with_its_region() {
             d.join(format!("seq{rings}.pc2")),
             d.join(format!("r{rings}.json")),
         );
-        let (_, err) = run_ok(&blend_args(
-            &base,
-            &target,
-            &[
-                "--frames",
-                "36",
-                "--thin-band-rings",
-                rings,
-                "--out",
-                s(&out),
-                "--report",
-                s(&report),
-            ],
-        ));
-        let r: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        let (err, r) = blend_rings(&base, &target, &["--frames", "36"], rings, &out, &report);
         (err, r, d.join(format!("seq{rings}-jumps.ply")))
     };
     let (err, r, ply) = run("0");

@@ -5,7 +5,8 @@
 
 use morphkit::mesh::{bbox_diagonal, Topology};
 use morphkit::springs::{
-    fold_metrics, linear_blend, BlendResult, ContinuityCheck, PhysicalBlend, Weights, JUMP_BOUND,
+    fold_metrics, linear_blend, BlendResult, Continuity, ContinuityCheck, PhysicalBlend, Weights,
+    JUMP_BOUND,
 };
 
 /// Consecutive frames may move a vertex by at most this multiple of the linear blend's step
@@ -27,6 +28,8 @@ pub struct SequenceReport {
     pub failures: Vec<String>,
     /// The frames, in order.
     pub frames: Vec<BlendResult>,
+    /// The jumps between consecutive frames.
+    pub continuity: Option<Continuity>,
 }
 
 /// Delta weights `α e_target` over `targets` targets, α = k / (steps − 1).
@@ -88,6 +91,7 @@ pub fn check_sequence(
             j.vertices.len()
         ));
     }
+    rep.continuity = Some(continuity);
     rep.frames = frames;
     rep
 }
