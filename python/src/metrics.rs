@@ -81,9 +81,9 @@ pub fn continuity<'py>(
             format!("bound: must be a finite positive number, got {bound}"),
         ));
     }
-    let lin = arrays::frames("linear", linear, None)?;
-    let n = lin.first().map(Vec::len);
-    let x = arrays::frames("frames", frames, n)?;
+    let x = arrays::frames("frames", frames, None)?;
+    let n = x.first().map(Vec::len);
+    let lin = arrays::frames("linear", linear, n)?;
     if x.len() != lin.len() {
         return Err(new_err(
             Kind::Mesh,
@@ -93,6 +93,8 @@ pub fn continuity<'py>(
     let diagonal = lin
         .first()
         .map_or(0.0, |l| morphkit::mesh::bbox_diagonal(l));
-    let c = py.detach(|| morphkit::springs::sequence_continuity(&x, &lin, bound, diagonal));
+    let c = py
+        .detach(|| morphkit::springs::sequence_continuity(&x, &lin, bound, diagonal))
+        .py(Kind::Mesh)?;
     to_dict(py, &c)
 }

@@ -83,5 +83,9 @@ def test_continuity_finds_a_part_that_snaps():
         morphkit.continuity(frames[:4], linear)
     with pytest.raises(morphkit.MeshError, match="vertices"):
         morphkit.continuity(frames[:, :5], linear)
+    ragged = list(frames)
+    ragged[2] = ragged[2][:5]
+    with pytest.raises(morphkit.MeshError, match="frame 2"):
+        morphkit.continuity(ragged, linear)
     with pytest.raises(morphkit.MorphkitError, match="bound"):
         morphkit.continuity(frames, linear, bound=-1.0)

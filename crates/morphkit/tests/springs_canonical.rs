@@ -216,7 +216,8 @@ fn sequences_are_continuous_without_flying_parts() {
             .iter()
             .map(|w| linear_blend(&s, w).unwrap())
             .collect();
-        let c = sequence_continuity(&frames, &linear, JUMP_BOUND, s.base().bbox_diagonal());
+        let c =
+            sequence_continuity(&frames, &linear, JUMP_BOUND, s.base().bbox_diagonal()).unwrap();
         assert!(c.jumps.is_empty(), "{c:?}");
         assert!(
             c.worst_ratio >= 1.0,

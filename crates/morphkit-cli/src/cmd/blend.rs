@@ -429,7 +429,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
                     row["folds"] = json!(fold_metrics(&shapes, &topology, w, &r.positions)?);
                 }
                 row["solver"] = json!(r.stats);
-                steps.push(&r.positions, &linear);
+                steps.push(&r.positions, &linear)?;
                 r.positions
             }
         };

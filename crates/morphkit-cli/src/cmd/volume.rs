@@ -104,7 +104,7 @@ pub fn run(
             "inversions": r.inversions,
         });
         let lin = morphkit::springs::linear_blend(shapes, w)?;
-        steps.push(&r.positions, &lin);
+        steps.push(&r.positions, &lin)?;
         if a.report.is_some() {
             row["linear"] = json!(blend_metrics(shapes, &topology, w, &lin)?);
             row["physical"] = json!(blend_metrics(shapes, &topology, w, &r.positions)?);

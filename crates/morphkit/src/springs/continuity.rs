@@ -18,6 +18,7 @@
 //! round-off). A pair with $\rho_k >$ [`JUMP_BOUND`] is a [`Jump`]; its region is every
 //! vertex whose own step exceeds the bound times the same denominator.
 
+use super::BlendError;
 use crate::mesh::{norm, sub, Point};
 
 /// Consecutive frames may move a vertex by at most this multiple of the linear blend's
@@ -91,16 +92,24 @@ impl ContinuityCheck {
         }
     }
 
-    /// The next frame: its physical positions and its linear blend (`#V` each).
-    ///
-    /// # Panics
-    /// If the frame's vertex count differs from the previous frame's (a caller error: every
-    /// frame of a sequence has the rig's vertices).
-    pub fn push(&mut self, positions: &[Point], linear: &[Point]) {
+    /// The next frame: its physical positions and its linear blend (`#V` each). Frames of
+    /// one sequence share their vertices: a frame whose positions or linear blend have another
+    /// count than the first frame's is refused (and not counted).
+    pub fn push(&mut self, positions: &[Point], linear: &[Point]) -> Result<(), BlendError> {
         let k = self.next_frame;
+        let expected = self
+            .previous
+            .as_ref()
+            .map_or(positions.len(), |p| p.0.len());
+        if positions.len() != expected || linear.len() != expected {
+            return Err(BlendError::InvalidOption(format!(
+                "frame {k} of the sequence has {} positions and {} linear-blend positions; the sequence has {expected} vertices",
+                positions.len(),
+                linear.len()
+            )));
+        }
         self.next_frame += 1;
         if let Some((px, pl)) = &self.previous {
-            assert_eq!(px.len(), positions.len(), "frames of one sequence");
             let dist = |a: &Point, b: &Point| norm(sub(*a, *b));
             let lin = pl
                 .iter()
@@ -132,6 +141,7 @@ impl ContinuityCheck {
             }
         }
         self.previous = Some((positions.to_vec(), linear.to_vec()));
+        Ok(())
     }
 
     /// The result so far.
@@ -141,17 +151,25 @@ impl ContinuityCheck {
 }
 
 /// [`ContinuityCheck`] over whole sequences: `frames[k]` and its linear blend `linear[k]`.
+/// Refuses sequences whose two lists differ in length or whose frames differ in vertex count.
 pub fn sequence_continuity(
     frames: &[Vec<Point>],
     linear: &[Vec<Point>],
     bound: f64,
     diagonal: f64,
-) -> Continuity {
+) -> Result<Continuity, BlendError> {
+    if frames.len() != linear.len() {
+        return Err(BlendError::InvalidOption(format!(
+            "{} frames but {} linear blends",
+            frames.len(),
+            linear.len()
+        )));
+    }
     let mut check = ContinuityCheck::new(bound, diagonal);
     for (x, l) in frames.iter().zip(linear) {
-        check.push(x, l);
+        check.push(x, l)?;
     }
-    check.finish()
+    Ok(check.finish())
 }
 
 #[cfg(test)]
@@ -166,7 +184,7 @@ mod tests {
     #[test]
     fn a_uniform_sequence_has_ratio_one_and_no_jump() {
         let lin: Vec<_> = (0..5).map(|k| line(0.1 * k as f64)).collect();
-        let c = sequence_continuity(&lin, &lin, JUMP_BOUND, 10.0);
+        let c = sequence_continuity(&lin, &lin, JUMP_BOUND, 10.0).unwrap();
         assert!((c.worst_ratio - 1.0).abs() < 1e-12, "{c:?}");
         assert!(c.jumps.is_empty());
         assert!(c.jump_vertices().is_empty());
@@ -183,7 +201,7 @@ mod tests {
             frame[4][1] += 1.0;
             frame[5][1] += 0.35;
         }
-        let c = sequence_continuity(&phys, &lin, JUMP_BOUND, 10.0);
+        let c = sequence_continuity(&phys, &lin, JUMP_BOUND, 10.0).unwrap();
         assert_eq!(c.jumps.len(), 1, "{c:?}");
         let j = &c.jumps[0];
         assert_eq!(j.frames, [2, 3]);
@@ -202,22 +220,42 @@ mod tests {
         let lin = vec![line(0.0); 3];
         let mut phys = lin.clone();
         phys[1][7][2] += 1e-8;
-        let c = sequence_continuity(&phys, &lin, JUMP_BOUND, 10.0);
+        let c = sequence_continuity(&phys, &lin, JUMP_BOUND, 10.0).unwrap();
         assert!(c.jumps.is_empty(), "{c:?}");
         assert!(c.worst_ratio <= 1.0 + 1e-12, "{}", c.worst_ratio);
         // A real move while the weights stand still is a jump.
         phys[2][7][2] += 1.0;
-        let c = sequence_continuity(&phys, &lin, JUMP_BOUND, 10.0);
+        let c = sequence_continuity(&phys, &lin, JUMP_BOUND, 10.0).unwrap();
         assert_eq!(c.jumps.len(), 1);
         assert_eq!(c.jumps[0].vertices, vec![7]);
     }
 
     #[test]
     fn one_frame_or_none_has_nothing_to_compare() {
-        let c = sequence_continuity(&[], &[], JUMP_BOUND, 1.0);
+        let c = sequence_continuity(&[], &[], JUMP_BOUND, 1.0).unwrap();
         assert_eq!(c.worst_ratio, 0.0);
         assert_eq!(c.worst_frames, None);
-        let c = sequence_continuity(&[line(0.0)], &[line(0.0)], JUMP_BOUND, 1.0);
+        let c = sequence_continuity(&[line(0.0)], &[line(0.0)], JUMP_BOUND, 1.0).unwrap();
         assert!(c.jumps.is_empty() && c.worst_frames.is_none());
+    }
+
+    #[test]
+    fn mismatched_frames_are_refused() {
+        let short: Vec<Point> = line(0.0)[..4].to_vec();
+        assert!(sequence_continuity(&[line(0.0)], &[], JUMP_BOUND, 1.0).is_err());
+        let e = sequence_continuity(
+            &[line(0.0), short.clone()],
+            &[line(0.0), line(0.1)],
+            JUMP_BOUND,
+            1.0,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("frame 1"), "{e}");
+        let mut check = ContinuityCheck::new(JUMP_BOUND, 1.0);
+        assert!(check.push(&line(0.0), &short).is_err());
+        check.push(&line(0.0), &line(0.0)).unwrap();
+        assert!(check.push(&short, &short).is_err());
+        check.push(&line(0.1), &line(0.1)).unwrap();
+        assert_eq!(check.finish().worst_frames, Some([0, 1]));
     }
 }

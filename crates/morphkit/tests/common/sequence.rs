@@ -66,7 +66,9 @@ pub fn check_sequence(
         rep.newton += r.stats.newton_iterations;
         let q = fold_metrics(&s, &topo, &weights[k], &r.positions).unwrap();
         let far = q.max_from_linear / q.largest_move.max(f64::MIN_POSITIVE);
-        steps.push(&r.positions, &linear_blend(&s, &weights[k]).unwrap());
+        steps
+            .push(&r.positions, &linear_blend(&s, &weights[k]).unwrap())
+            .unwrap();
         rep.worst_from_linear = rep.worst_from_linear.max(far);
         rep.worst_fold_excess = rep
             .worst_fold_excess
