@@ -8,7 +8,9 @@
 
 use crate::outputs::{Kind, Plan};
 use morphkit::mesh::{generate, ShapeSet};
-use morphkit::springs::{BlendOptions, PhysicalBlend, Weights};
+use morphkit::springs::{
+    linear_blend, BlendOptions, ContinuityCheck, PhysicalBlend, Weights, JUMP_BOUND,
+};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -84,15 +86,20 @@ fn time_sequence(
         })
         .collect();
     let t1 = Instant::now();
-    for r in solver.solve_many(&weights, threads) {
+    let results = solver.solve_many(&weights, threads);
+    let per_step = t1.elapsed().as_secs_f64() / steps as f64;
+    // Not timed: whether the sequence jumps (see `morphkit blend`'s "Jumps between frames").
+    let mut jumps = ContinuityCheck::new(JUMP_BOUND, shapes.base().bbox_diagonal());
+    for (r, w) in results.into_iter().zip(&weights) {
         let r = r?;
         iters += r.stats.newton_iterations;
         facts += r.stats.factorizations;
         cgs += r.stats.cg_iterations;
         worst_grad = worst_grad.max(r.stats.gradient_norm / r.stats.gradient_tolerance);
         all_converged &= r.stats.converged;
+        jumps.push(&r.positions, &linear_blend(shapes, w)?)?;
     }
-    let per_step = t1.elapsed().as_secs_f64() / steps as f64;
+    let continuity = jumps.finish();
     let samples = solver.start_samples_solved();
     let row = json!({
         "mesh": name,
@@ -108,11 +115,13 @@ fn time_sequence(
         "start_sample_solves": samples,
         "all_converged": all_converged,
         "worst_gradient_over_tolerance": worst_grad,
+        "worst_step_over_linear": continuity.worst_ratio,
+        "jumps": continuity.jumps.len(),
         "peak_rss_mib": peak_rss_mib(),
         "threads": threads,
     });
     println!(
-        "{:<28} {:>7} {:>8} {:>9.1} {:>10.2} {:>7.2} {:>7.2} {:>7.1} {:>7} {:>9}",
+        "{:<28} {:>7} {:>8} {:>9.1} {:>10.2} {:>7.2} {:>7.2} {:>7.1} {:>7} {:>9} {:>6.2}",
         name,
         shapes.num_vertices(),
         solver.summary().springs,
@@ -124,7 +133,8 @@ fn time_sequence(
         samples,
         peak_rss_mib()
             .map(|m| format!("{m:.0}"))
-            .unwrap_or_else(|| "-".into())
+            .unwrap_or_else(|| "-".into()),
+        continuity.worst_ratio
     );
     Ok(row)
 }
@@ -154,7 +164,7 @@ fn springs_suite(data: Option<&Path>, seq: &Sequence) -> anyhow::Result<Vec<serd
     };
     println!("physical blend, {steps} steps of α in [0, 1], default options (tolerance 1e-6 · k0), {threads} thread(s), {start}");
     println!(
-        "{:<28} {:>7} {:>8} {:>9} {:>10} {:>7} {:>7} {:>7} {:>7} {:>9}",
+        "{:<28} {:>7} {:>8} {:>9} {:>10} {:>7} {:>7} {:>7} {:>7} {:>9} {:>6}",
         "mesh",
         "verts",
         "springs",
@@ -164,7 +174,8 @@ fn springs_suite(data: Option<&Path>, seq: &Sequence) -> anyhow::Result<Vec<serd
         "factor",
         "cg",
         "samples",
-        "peak MiB"
+        "peak MiB",
+        "step"
     );
     let mut rows = Vec::new();
     for n in [2_200, 8_500, 18_600] {
