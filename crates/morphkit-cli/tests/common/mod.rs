@@ -69,14 +69,20 @@ pub fn write_tube(path: &std::path::Path, nu: usize, nv: usize, scale: f64, bend
             text += &format!("v {} {} {}\n", scale * px, scale * y, scale * pz);
         }
     }
-    let id = |i: usize, j: usize| j * nu + i % nu + 1;
-    for j in 0..nv - 1 {
-        for i in 0..nu {
+    ring_faces(&mut text, nv, nu);
+    std::fs::write(path, text).unwrap();
+}
+
+/// Appends the OBJ faces joining `rings` consecutive rings of `around` vertices each (ring `j`
+/// holds vertices `j · around …`, each ring closed), two triangles per quad.
+fn ring_faces(text: &mut String, rings: usize, around: usize) {
+    let id = |i: usize, j: usize| j * around + i % around + 1;
+    for j in 0..rings - 1 {
+        for i in 0..around {
             let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            text += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
+            *text += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
         }
     }
-    std::fs::write(path, text).unwrap();
 }
 
 /// An annulus of 3 rings of 160 vertices (radii 0.85…1.15) lying on a sphere of radius 1.5,
@@ -94,13 +100,7 @@ pub fn write_annulus(path: &std::path::Path, squash: f64) {
             text += &format!("v {x} {y} {}\n", cap(x, y));
         }
     }
-    let id = |i: usize, j: usize| i * around + j % around + 1;
-    for i in 0..rows - 1 {
-        for j in 0..around {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            text += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
-        }
-    }
+    ring_faces(&mut text, rows, around);
     std::fs::write(path, text).unwrap();
 }
 
