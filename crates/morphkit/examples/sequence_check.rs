@@ -9,10 +9,10 @@
 //!     --example sequence_check -- [horse|ict|all] [STEPS] [NAME-FILTER]
 //! ```
 //!
-//! `HINGE=c` sets the hinge weight, `BANDS=r` the thin-band rings, `NO_SAMPLED=1` starts
-//! from the plain predictor, and `DUMP=DIR` writes every frame's physical, predicted and
-//! linear positions as raw little-endian f64 (`#V × 3`) to `DIR/NAME-{phys,pred,lin}-KK.f64`
-//! for pictures.
+//! `HINGE=c` sets the hinge weight, `MARGIN=m` its fold margin (radians), `BANDS=r` the
+//! thin-band rings, `NO_SAMPLED=1` starts from the plain predictor, and `DUMP=DIR` writes
+//! every frame's physical, predicted and linear positions as raw little-endian f64 (`#V × 3`)
+//! to `DIR/NAME-{phys,pred,lin}-KK.f64` for pictures.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -36,6 +36,9 @@ fn options() -> BlendOptions {
     }
     if let Some(r) = env("BANDS") {
         o.thin_band_rings = r;
+    }
+    if let Some(m) = env("MARGIN") {
+        o.hinges.min_fold_margin = m;
     }
     o
 }
