@@ -223,23 +223,38 @@ pub(super) fn weights_json(w: &Weights) -> serde_json::Value {
     }
 }
 
-/// `OUT-unconverged.ply` beside `out`.
-pub(super) fn unconverged_path(out: &Path) -> PathBuf {
+/// `OUT-WHAT.ply` beside `out` (`OUT` the file name up to its first dot).
+fn region_path(out: &Path, what: &str) -> PathBuf {
     let stem = out
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "blend".into());
     let stem = stem.split('.').next().unwrap_or("blend").to_string();
-    out.with_file_name(format!("{stem}-unconverged.ply"))
+    out.with_file_name(format!("{stem}-{what}.ply"))
 }
 
-/// Where the vertices of jumps between frames are shown, beside the output.
+/// `OUT-unconverged.ply` beside `out`.
+pub(super) fn unconverged_path(out: &Path) -> PathBuf {
+    region_path(out, "unconverged")
+}
+
+/// `OUT-jumps.ply` beside `out`: the vertices of jumps between frames.
 pub(super) fn jumps_path(out: &Path) -> PathBuf {
-    let p = unconverged_path(out);
-    let name = p
-        .file_name()
-        .map(|n| n.to_string_lossy().replace("-unconverged", "-jumps"));
-    p.with_file_name(name.unwrap_or_else(|| "blend-jumps.ply".into()))
+    region_path(out, "jumps")
+}
+
+/// Writes `base` to `path` with the vertices flagged in `region` red, the others grey.
+pub(super) fn write_region(
+    outputs: &mut Outputs,
+    path: &Path,
+    base: &morphkit::mesh::TriMesh,
+    region: &[bool],
+) -> anyhow::Result<()> {
+    let colors = region
+        .iter()
+        .map(|&f| if f { [220, 30, 30] } else { [200, 200, 200] })
+        .collect();
+    outputs.colored_ply(path, base, &io::Colors::PerVertex(colors))
 }
 
 /// Warns about the jumps of a sequence (a part that snapped from one equilibrium to another
@@ -274,11 +289,11 @@ pub(super) fn report_jumps(
         region.len(),
         path.display()
     );
-    let mut colors = vec![[200, 200, 200]; base.positions.len()];
+    let mut flagged = vec![false; base.positions.len()];
     for &v in &region {
-        colors[v as usize] = [220, 30, 30];
+        flagged[v as usize] = true;
     }
-    outputs.colored_ply(&path, base, &io::Colors::PerVertex(colors))?;
+    write_region(outputs, &path, base, &flagged)?;
     Ok(Some(path))
 }
 
@@ -450,11 +465,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
             if unconverged.len() > 10 { ", …" } else { "" },
             path.display()
         );
-        let colors = failed
-            .iter()
-            .map(|&f| if f { [220, 30, 30] } else { [200, 200, 200] })
-            .collect();
-        outputs.colored_ply(path, shapes.base(), &io::Colors::PerVertex(colors))?;
+        write_region(&mut outputs, path, shapes.base(), &failed)?;
     }
     let continuity = steps.finish();
     let jumps_ply = report_jumps(&mut outputs, &a.out, shapes.base(), &continuity)?;

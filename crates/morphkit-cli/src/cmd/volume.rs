@@ -13,7 +13,7 @@
 //! - `--anchor auto|x,y,z[,size]`: a small stiff cube inside the base whose vertices are the
 //!   boundary conditions; the result follows its slerp-interpolated rigid motion.
 
-use super::blend::{report_jumps, unconverged_path, weights_json, BlendArgs};
+use super::blend::{report_jumps, unconverged_path, weights_json, write_region, BlendArgs};
 use crate::outputs::Outputs;
 use crate::util::progress;
 use anyhow::{bail, Context};
@@ -132,11 +132,7 @@ pub fn run(
             weights.len(),
             path.display()
         );
-        let colors = failed
-            .iter()
-            .map(|&f| if f { [220, 30, 30] } else { [200, 200, 200] })
-            .collect();
-        outputs.colored_ply(path, shapes.base(), &io::Colors::PerVertex(colors))?;
+        write_region(&mut outputs, path, shapes.base(), &failed)?;
     }
     let out_set = ShapeSet::new(shapes.base().clone(), frames)?;
     let single = io::Format::from_path(&a.out).is_some_and(|f| f.is_single_mesh());
