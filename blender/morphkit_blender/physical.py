@@ -23,7 +23,7 @@ import time
 import bpy
 import numpy as np
 
-from . import geometry
+from . import geometry, jumps
 
 RESULT_KEY = "morphkit_physical"
 _solvers = {}  # object name -> (signature, PhysicalBlend, F, Predictor)
@@ -333,30 +333,6 @@ class MORPHKIT_OT_physical_linear(bpy.types.Operator):
         return {"FINISHED"}
 
 
-JUMPS_GROUP = "morphkit jumps"
-
-
-def _linear_frames(obj, rows):
-    """The linear blend of `obj`'s shape keys for each row of delta weights."""
-    keys = obj.data.shape_keys.key_blocks
-    base = geometry.key_coords(keys[0])
-    deltas = [geometry.key_coords(k) - base for k in target_keys(obj)]
-    return [base + sum(w * d for w, d in zip(row, deltas)) for row in rows]
-
-
-def _mark_jumps(obj, continuity):
-    """Puts the vertices of every jump in `continuity` (``morphkit.continuity``) into the vertex
-    group ``morphkit jumps`` (removed when nothing jumped), and their count in
-    ``obj["morphkit_jumps"]``."""
-    old = obj.vertex_groups.get(JUMPS_GROUP)
-    if old is not None:
-        obj.vertex_groups.remove(old)
-    region = sorted({v for j in continuity["jumps"] for v in j["vertices"]})
-    obj["morphkit_jumps"] = len(region)
-    if region:
-        obj.vertex_groups.new(name=JUMPS_GROUP).add(region, 1.0, "REPLACE")
-
-
 class MORPHKIT_OT_physical_bake(bpy.types.Operator):
     """Bake the shape-key animation over the scene's frame range as a physical PC2 cache on a
     Mesh Cache modifier"""
@@ -395,7 +371,10 @@ class MORPHKIT_OT_physical_bake(bpy.types.Operator):
             frames = blend.solve_many(rows, threads=self.threads)
             morphkit.write_animation(path, frames, F)
             # A part that snaps between two equilibria of the springs is shown, not hidden.
-            continuity = morphkit.continuity(frames, _linear_frames(obj, rows))
+            keys = obj.data.shape_keys.key_blocks
+            base = geometry.key_coords(keys[0])
+            targets = [geometry.key_coords(k) for k in target_keys(obj)]
+            continuity = morphkit.continuity(frames, jumps.linear_frames(base, targets, rows))
         except morphkit.MorphkitError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
@@ -407,7 +386,7 @@ class MORPHKIT_OT_physical_bake(bpy.types.Operator):
         mod.frame_start = scene.frame_start
         mod.frame_scale = 1.0
         obj["morphkit_baked_frames"] = len(rows)
-        _mark_jumps(obj, continuity)
+        jumps.mark(obj, continuity)
         if continuity["jumps"]:
             j = max(continuity["jumps"], key=lambda j: j["ratio"])
             a, b = (scene.frame_start + k for k in j["frames"])
@@ -415,7 +394,7 @@ class MORPHKIT_OT_physical_bake(bpy.types.Operator):
                 {"WARNING"},
                 f"baked {len(rows)} frames to {path}; a part jumped between frames {a} and {b} "
                 f"({len(j['vertices'])} vertices, {j['ratio']:.1f}x the linear blend's step): "
-                f"vertex group '{JUMPS_GROUP}'",
+                f"vertex group '{jumps.JUMPS_GROUP}'",
             )
             return {"FINISHED"}
         self.report({"INFO"}, f"baked {len(rows)} frames to {path}")

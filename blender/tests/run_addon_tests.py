@@ -25,7 +25,7 @@ results = {}
 bpy.ops.preferences.addon_install(filepath=str(ZIP), overwrite=True)
 bpy.ops.preferences.addon_enable(module="morphkit_blender")
 import morphkit  # noqa: E402  (found by the add-on: vendored in the zip)
-from morphkit_blender import geometry, physical  # noqa: E402
+from morphkit_blender import geometry, jumps, physical  # noqa: E402
 
 results["module"] = morphkit.__file__
 
@@ -219,13 +219,13 @@ check(err < 1e-6, f"the Mesh Cache shows frame 3 off by {err}")
 results["baked_frames"] = int(frames.shape[0])
 # A smooth bend does not jump: no vertex group; the group holds a jump's vertices when given.
 check(cyl.get("morphkit_jumps") == 0, f"jumps {cyl.get('morphkit_jumps')}")
-check(physical.JUMPS_GROUP not in cyl.vertex_groups, "a jump group after a smooth bake")
-physical._mark_jumps(cyl, {"jumps": [{"vertices": [5, 2]}, {"vertices": [2, 9]}]})
-group = cyl.vertex_groups[physical.JUMPS_GROUP]
+check(jumps.JUMPS_GROUP not in cyl.vertex_groups, "a jump group after a smooth bake")
+jumps.mark(cyl, {"jumps": [{"vertices": [5, 2]}, {"vertices": [2, 9]}]})
+group = cyl.vertex_groups[jumps.JUMPS_GROUP]
 marked = sorted(v.index for v in cyl.data.vertices if any(g.group == group.index for g in v.groups))
 check(marked == [2, 5, 9] and cyl["morphkit_jumps"] == 3, f"jump group {marked}")
-physical._mark_jumps(cyl, {"jumps": []})
-check(physical.JUMPS_GROUP not in cyl.vertex_groups, "the jump group was not cleared")
+jumps.mark(cyl, {"jumps": []})
+check(jumps.JUMPS_GROUP not in cyl.vertex_groups, "the jump group was not cleared")
 cyl.modifiers.remove(cyl.modifiers["morphkit physical"])
 
 # An obstacle in the bending half's path (Fig. 2): a closed mesh object with morphkit_obstacle.
