@@ -80,9 +80,9 @@ pub(super) struct Rig {
     /// Mean structure-spring stiffness on the base (the unit of point-target stiffness).
     mean_stiffness: f64,
     /// The rotation-aware predictor, when asked for and possible.
-    rotation: Option<RotationPredictor>,
+    pub(super) rotation: Option<RotationPredictor>,
     /// Per vertex: held at the linear blend by a boundary condition (not the bands).
-    is_fixed: Vec<bool>,
+    pub(super) is_fixed: Vec<bool>,
     /// Each target's correction fields of the sampled start.
     pub(super) samples: StartSamples,
     summary: RigSummary,
@@ -446,48 +446,6 @@ impl FrameSolver<'_> {
 }
 
 impl Rig {
-    /// The rotation-aware prediction for coefficients `c` (world coordinates, fixed vertices
-    /// at `lin`, the linear blend), or `None` where the linear blend is the predictor.
-    fn rotation_prediction(&self, c: &[f64], lin: &[Point]) -> Option<Vec<Point>> {
-        self.rotation.as_ref()?.predict(c, lin, &self.is_fixed)
-    }
-
-    /// Where a solve starts, in solver coordinates: `start_from` (with fixed vertices at
-    /// their linear blend `lin` and thin bands at `rotated`) when given, else the predictor:
-    /// `rotated` ([`rotation_prediction`](Self::rotation_prediction)) or `lin`.
-    fn start(
-        &self,
-        lin: &[Point],
-        rotated: Option<&[Point]>,
-        start_from: Option<&[Point]>,
-    ) -> Vec<f64> {
-        let predicted = rotated.unwrap_or(lin);
-        let mut x = predictor::predict(&self.constraints, start_from.unwrap_or(predicted));
-        if start_from.is_some() {
-            for &v in &self.constraints.fixed {
-                let v = v as usize;
-                x[3 * v..3 * v + 3].copy_from_slice(&lin[v]);
-            }
-            for &v in &self.constraints.bands {
-                let v = v as usize;
-                x[3 * v..3 * v + 3].copy_from_slice(&predicted[v]);
-            }
-        }
-        x
-    }
-
-    /// The predictor $P$ in world coordinates, from the linear blend and the rotation-aware
-    /// prediction of the same coefficients.
-    fn world_prediction(&self, lin: &[Point], rotated: Option<&[Point]>) -> Vec<Point> {
-        predictor::output(&self.constraints, &self.start(lin, rotated, None), lin)
-    }
-
-    /// The predictor $P(c)$ in world coordinates.
-    pub(super) fn predicted(&self, c: &[f64]) -> Vec<Point> {
-        let lin = predictor::linear(&self.shapes, c);
-        self.world_prediction(&lin, self.rotation_prediction(c, &lin).as_deref())
-    }
-
     fn check_targets(&self, targets: &[PointTarget]) -> Result<(), BlendError> {
         let n = self.shapes.num_vertices();
         for t in targets {

@@ -10,7 +10,12 @@
 //!
 //! After the solve, each gauged component is moved rigidly (Kabsch) onto $L(c)$, so it sits
 //! where an artist expects it; fixed vertices are already in world coordinates.
+//!
+//! The rig's own view of $P$ (with the rotation-aware prediction of
+//! [`rotation_predictor`](super::rotation_predictor) and thin bands placed on it) is the
+//! `impl Rig` block at the end.
 
+use super::blender::Rig;
 use super::constraints::rotate_into;
 use super::Constraints;
 use crate::geom::kabsch;
@@ -55,4 +60,48 @@ pub(crate) fn output(constraints: &Constraints, x: &[f64], lin: &[Point]) -> Vec
         }
     }
     p
+}
+
+impl Rig {
+    /// The rotation-aware prediction for coefficients `c` (world coordinates, fixed vertices
+    /// at `lin`, the linear blend), or `None` where the linear blend is the predictor.
+    pub(super) fn rotation_prediction(&self, c: &[f64], lin: &[Point]) -> Option<Vec<Point>> {
+        self.rotation.as_ref()?.predict(c, lin, &self.is_fixed)
+    }
+
+    /// Where a solve starts, in solver coordinates: `start_from` (with fixed vertices at
+    /// their linear blend `lin` and thin bands at `rotated`) when given, else the predictor:
+    /// `rotated` ([`rotation_prediction`](Self::rotation_prediction)) or `lin`.
+    pub(super) fn start(
+        &self,
+        lin: &[Point],
+        rotated: Option<&[Point]>,
+        start_from: Option<&[Point]>,
+    ) -> Vec<f64> {
+        let predicted = rotated.unwrap_or(lin);
+        let mut x = predict(&self.constraints, start_from.unwrap_or(predicted));
+        if start_from.is_some() {
+            for &v in &self.constraints.fixed {
+                let v = v as usize;
+                x[3 * v..3 * v + 3].copy_from_slice(&lin[v]);
+            }
+            for &v in &self.constraints.bands {
+                let v = v as usize;
+                x[3 * v..3 * v + 3].copy_from_slice(&predicted[v]);
+            }
+        }
+        x
+    }
+
+    /// The predictor $P$ in world coordinates, from the linear blend and the rotation-aware
+    /// prediction of the same coefficients.
+    pub(super) fn world_prediction(&self, lin: &[Point], rotated: Option<&[Point]>) -> Vec<Point> {
+        output(&self.constraints, &self.start(lin, rotated, None), lin)
+    }
+
+    /// The predictor $P(c)$ in world coordinates.
+    pub(super) fn predicted(&self, c: &[f64]) -> Vec<Point> {
+        let lin = linear(&self.shapes, c);
+        self.world_prediction(&lin, self.rotation_prediction(c, &lin).as_deref())
+    }
 }
