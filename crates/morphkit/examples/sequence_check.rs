@@ -20,7 +20,10 @@ mod common;
 use common::sequence::{check_sequence, ramp};
 use morphkit::io::read_shape_set;
 use morphkit::mesh::Point;
-use morphkit::springs::{linear_blend, BlendOptions, BlendResult, PhysicalBlend};
+use morphkit::mesh::Topology;
+use morphkit::springs::{
+    blend_metrics, fold_metrics, linear_blend, BlendOptions, BlendResult, PhysicalBlend,
+};
 
 fn env<T: std::str::FromStr>(name: &str) -> Option<T> {
     std::env::var(name).ok().and_then(|v| v.parse().ok())
@@ -39,6 +42,12 @@ fn options() -> BlendOptions {
     }
     if let Some(m) = env("MARGIN") {
         o.hinges.min_fold_margin = m;
+    }
+    if let Some(b) = env("BENDING_SCALE") {
+        o.springs.bending_scale = b;
+    }
+    if std::env::var("NO_BENDING").is_ok() {
+        o.springs.bending = false;
     }
     o
 }
@@ -62,6 +71,36 @@ fn dump(name: &str, solver: &PhysicalBlend, targets: usize, target: usize, frame
     }
 }
 
+/// Creases and edge-length RMS against the linear blend, summed over the frames.
+fn quality(
+    name: &str,
+    solver: &PhysicalBlend,
+    targets: usize,
+    target: usize,
+    frames: &[BlendResult],
+) {
+    let s = solver.shapes();
+    let topo = Topology::new(s.num_vertices(), s.triangles());
+    let (mut cr, mut cr_lin, mut rms, mut rms_lin) = (0, 0, 0.0, 0.0);
+    for (w, r) in ramp(targets, target, frames.len()).iter().zip(frames) {
+        let q = fold_metrics(s, &topo, w, &r.positions).unwrap();
+        cr += q.creases;
+        cr_lin += q.creases_linear;
+        rms += blend_metrics(s, &topo, w, &r.positions)
+            .unwrap()
+            .edge_length_rms;
+        rms_lin += blend_metrics(s, &topo, w, &linear_blend(s, w).unwrap())
+            .unwrap()
+            .edge_length_rms;
+    }
+    let n = frames.len() as f64;
+    println!(
+        "{name}: creases {cr} vs {cr_lin} linear, edge RMS {:.5} vs {:.5} linear (mean over frames)",
+        rms / n,
+        rms_lin / n
+    );
+}
+
 fn run(
     name: &str,
     solver: &mut PhysicalBlend,
@@ -72,6 +111,7 @@ fn run(
     let t0 = std::time::Instant::now();
     let rep = check_sequence(name, solver, targets, target, steps);
     let secs = t0.elapsed().as_secs_f64();
+    quality(name, solver, targets, target, &rep.frames);
     dump(name, solver, targets, target, &rep.frames);
     for f in &rep.failures {
         println!("  {f}");
