@@ -87,8 +87,12 @@ pub struct BlendArgs {
     /// Base spring stiffness k0 (only ratios matter).
     #[arg(long, default_value_t = 1.0)]
     pub k0: f64,
-    /// Leave out bending springs (structure springs only).
+    /// Add Ma et al.'s bending springs between vertices two edges apart (off by default: the
+    /// signed hinge is the bending term; see the README's "Choices").
     #[arg(long)]
+    pub bending_springs: bool,
+    /// Without bending springs: the default now, accepted for older scripts.
+    #[arg(long, hide = true, conflicts_with = "bending_springs")]
     pub no_bending: bool,
     /// Convergence tolerance on the gradient, in units of k0 × strain.
     #[arg(long, default_value_t = 1e-6)]
@@ -372,7 +376,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let options = BlendOptions {
         springs: SpringOptions {
             k0: a.k0,
-            bending: !a.no_bending,
+            bending: a.bending_springs,
             ..Default::default()
         },
         hinges: HingeOptions {

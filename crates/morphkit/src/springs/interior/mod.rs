@@ -5,7 +5,8 @@
 //!
 //! The blend runs on the surface vertices `0..n` followed by the *extra* vertices: interior
 //! points `n..n + m` and anchor vertices `n + m..`. No triangle touches an extra vertex; the
-//! surface keeps its structure and bending springs and its signed hinges, and the extra
+//! surface keeps its springs (structure springs, and bending springs when they are turned on)
+//! and its signed hinges, and the extra
 //! vertices enter through two more [`SpringTerm`](super::terms::SpringTerm)s:
 //!
 //! - **internal springs** ([`SpringKind::Internal`](super::SpringKind)), stiffness
