@@ -360,3 +360,58 @@ fn a_hard_pull_moves_its_vertex_and_the_fixed_part_stays() {
         "no targets",
     );
 }
+
+/// A free tube (nothing fixed) bent 120°, with one vertex near its straight end pulled out
+/// far in the target, so that the triangles around it stretch past the kinematic threshold:
+/// those few vertices hold the shape in the solver, but not its place in the world. The
+/// result is aligned as a whole to the linear blend (its best rigid fit onto it is the
+/// identity), like a gauged component, and a pull on it is refused like one on a gauged
+/// component.
+#[test]
+fn a_component_held_only_by_kinematic_vertices_is_aligned_as_a_whole() {
+    let m = generate::tube(0.3, 4.0, 12, 24, false);
+    let mut bent = generate::bend(&m.positions, 2.0, 2.0, 120f64.to_radians());
+    let spike = 12 * 3 + 4; // ring 3 of 24, near the straight end
+    for a in 1..3 {
+        bent[spike][a] *= 25.0;
+    }
+    let s = ShapeSet::new(
+        m.clone(),
+        vec![
+            ("straight".into(), m.positions.clone()),
+            ("bent".into(), bent),
+        ],
+    )
+    .unwrap();
+    let options = BlendOptions {
+        fixed: FixedVertices::None,
+        ..Default::default()
+    };
+    let mut solver = PhysicalBlend::new(&s, &options).unwrap();
+    let sum = solver.summary().clone();
+    assert!(sum.kinematic_vertices >= 3, "{sum:?}");
+    assert_eq!(sum.gauged_components, 1, "{sum:?}");
+    let w = Weights::Alpha(0.5);
+    let r = solver.solve(&w).unwrap();
+    assert!(r.stats.converged, "{:?}", r.stats);
+    let lin = linear_blend(&s, &w).unwrap();
+    let fit = morphkit::geom::kabsch(&r.positions, &lin, &[]);
+    let diag = bbox_diagonal(&lin);
+    let moved = r
+        .positions
+        .iter()
+        .map(|&p| dist(fit.apply(p), p))
+        .fold(0.0, f64::max);
+    assert!(
+        moved <= 1e-9 * diag,
+        "the fit still moves a vertex by {moved}"
+    );
+    // Endpoints stay exact.
+    let end = solver.solve(&Weights::Alpha(1.0)).unwrap();
+    assert!(max_dist(&end.positions, s.positions(1)) <= 1e-9 * diag);
+    let pull = morphkit::springs::PointTarget::hard(0, [0.0, 0.0, 1.0]);
+    assert!(matches!(
+        solver.solve_with(&w, &[pull], None),
+        Err(BlendError::TargetOnFreeComponent { .. })
+    ));
+}

@@ -16,17 +16,19 @@ use common::sequence::{check_sequence, SequenceReport};
 use morphkit::io::read_shape_set;
 use morphkit::springs::{BlendOptions, PhysicalBlend};
 
-/// Sequences that break the step or distance bound with the default options: three horse
-/// legs snap between two equilibria (a lower hind leg turns by a tenth of the body in one
-/// step, 5.8–8.8× the linear step), horse-07's hind hoof lies 0.51 of the largest move from
-/// the linear blend, and ICT jawOpen's lower gums and tongue, turning about a line of static
-/// and kinematic vertices, swing through 25× the linear step.
-const KNOWN: [&str; 5] = ["horse-02", "horse-04", "horse-06", "horse-07", "jawOpen"];
+/// Sequences that break the step bound with the default options: three horse legs snap
+/// between two equilibria (a lower hind leg turns by a tenth of the body in one step,
+/// 4.6–6.8× the linear step), and ICT jawOpen's lower gums, turning about a line of static
+/// and kinematic vertices, swing through 4.1× the linear step (25× with Ma's bending
+/// springs, which are off by default). horse-07, which used to end 0.51 of the largest move
+/// from the linear blend because its seven kinematic vertices pinned the rearing body in the
+/// world, passes since such a component is aligned as a whole.
+const KNOWN: [&str; 4] = ["horse-02", "horse-04", "horse-06", "jawOpen"];
 
 /// The part that jumps in each known jumping sequence, as the continuity check reports it:
 /// `(name, lowest and highest vertex id allowed, most vertices)`. The horse legs are about
 /// 500 vertices of the 8 431; the ICT jawOpen part lies in the 2 977-vertex gums and tongue
-/// component (vertices 14 062–17 038). horse-07 does not jump (its hoof is too far).
+/// component (vertices 14 062–17 038).
 const JUMPING: [(&str, u32, u32, usize); 4] = [
     ("horse-02", 0, 8430, 1000),
     ("horse-04", 0, 8430, 1000),

@@ -108,8 +108,9 @@ impl SceneBlend {
             fixed[v as usize] = true;
         }
         let mut gauged = vec![false; n_all];
-        for g in &constraints.gauges {
-            for &v in &g.vertices {
+        let free = constraints.gauges.iter().map(|g| &g.vertices);
+        for comp in free.chain(constraints.aligned.iter().map(|a| &a.vertices)) {
+            for &v in comp {
                 gauged[v as usize] = true;
             }
         }

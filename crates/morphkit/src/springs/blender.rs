@@ -204,7 +204,7 @@ impl PhysicalBlend {
             constraints.fixed.len() - constraints.kinematic.len() - constraints.bands.len();
         summary.kinematic_vertices = constraints.kinematic.len();
         summary.band_vertices = constraints.bands.len();
-        summary.gauged_components = constraints.gauges.len();
+        summary.gauged_components = constraints.gauges.len() + constraints.aligned.len();
         let vertex_order = match o.ordering {
             FillOrdering::NestedDissection => Some(vertex_nested_dissection(&block_pattern)?),
             FillOrdering::Amd => None,
@@ -463,11 +463,11 @@ impl Rig {
                     "the target of vertex {v} needs a finite position and a finite positive stiffness"
                 )));
             }
-            if self
-                .constraints
-                .gauges
-                .iter()
-                .any(|g| g.vertices.binary_search(&t.vertex).is_ok())
+            let c = &self.constraints;
+            let free = c.gauges.iter().map(|g| &g.vertices);
+            if free
+                .chain(c.aligned.iter().map(|a| &a.vertices))
+                .any(|comp| comp.binary_search(&t.vertex).is_ok())
             {
                 return Err(BlendError::TargetOnFreeComponent { vertex: t.vertex });
             }

@@ -45,6 +45,14 @@ pub struct Constraints {
     pub bands: Vec<u32>,
     /// Components held only by the gauge, to align after each solve.
     pub gauges: Vec<Gauge>,
+    /// Components whose only boundary conditions are kinematic vertices (with at most a few
+    /// static ones that do not span a plane): solved with those vertices at the linear blend,
+    /// then moved rigidly onto the linear blend as a whole, like a gauged component. A few
+    /// over-stretched triangles are no material, so they hold the shape, not its place in
+    /// the world: pinned where the linear blend puts them, the body would turn about them
+    /// (horse-07, whose 7 kinematic vertices lie on one hind leg, rears about that leg and
+    /// ended 0.55 of the largest move away from the linear blend; aligned as a whole, 0.14).
+    pub aligned: Vec<AlignedComponent>,
     /// Per degree of freedom (`3 #V`): fixed by a boundary condition or by the gauge.
     pub fixed_dof: Vec<bool>,
 }
@@ -113,6 +121,7 @@ impl Constraints {
         let diag = bbox_diagonal(base).max(f64::MIN_POSITIVE);
         let mut fixed_dof = vec![false; 3 * n];
         let mut gauges = Vec::new();
+        let mut aligned = Vec::new();
         for (c, verts) in members.iter().enumerate() {
             if verts.iter().all(|&v| is_band[v as usize]) {
                 // A thin band follows the predictor: every vertex held, nothing to gauge.
@@ -135,9 +144,18 @@ impl Constraints {
                 .filter(|&&v| is_fixed[v as usize] || is_kinematic[v as usize])
                 .map(|&v| base[v as usize])
                 .collect();
-            if spans_plane(&fixed_here, 1e-9 * diag)
-                || (!explicit_here(explicit, &fixed_here) && spans_plane(&held, 1e-9 * diag))
-            {
+            if spans_plane(&fixed_here, 1e-9 * diag) {
+                continue;
+            }
+            if !explicit_here(explicit, &fixed_here) && spans_plane(&held, 1e-9 * diag) {
+                aligned.push(AlignedComponent {
+                    vertices: verts.clone(),
+                    held: verts
+                        .iter()
+                        .copied()
+                        .filter(|&v| is_fixed[v as usize] || is_kinematic[v as usize])
+                        .collect(),
+                });
                 continue;
             }
             for &v in verts {
@@ -185,6 +203,7 @@ impl Constraints {
             kinematic,
             bands,
             gauges,
+            aligned,
             fixed_dof,
         })
     }
@@ -193,6 +212,16 @@ impl Constraints {
     pub fn num_free_dofs(&self) -> usize {
         self.fixed_dof.iter().filter(|f| !**f).count()
     }
+}
+
+/// A component held only by kinematic vertices (see [`Constraints::aligned`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AlignedComponent {
+    /// Its vertices, sorted.
+    pub vertices: Vec<u32>,
+    /// Its held (kinematic or static) vertices, sorted: they span a plane, so the rigid
+    /// motion between the solver's frame and the world is recovered from them.
+    pub held: Vec<u32>,
 }
 
 /// Connected components of the vertices under every coupling of the energy (mesh edges,

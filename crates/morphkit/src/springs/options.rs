@@ -247,7 +247,9 @@ pub struct RigSummary {
     /// Vertices of thin bands that follow the predictor
     /// ([`BlendOptions::thin_band_rings`]).
     pub band_vertices: usize,
-    /// Connected components held only by the rigid gauge.
+    /// Connected components with no place in the world of their own, aligned rigidly to
+    /// the linear blend after each solve: those held only by the rigid gauge, and those held
+    /// only by kinematic vertices.
     pub gauged_components: usize,
     /// Free unknowns of the Newton system.
     pub free_dofs: usize,

@@ -8,8 +8,9 @@
 //! the weights alone and equals shape $s$ exactly at one-hot weights $e_s$, where every term's
 //! energy and gradient vanish: endpoints are exact after zero iterations.
 //!
-//! After the solve, each gauged component is moved rigidly (Kabsch) onto $L(c)$, so it sits
-//! where an artist expects it; fixed vertices are already in world coordinates.
+//! After the solve, each gauged component, and each component held only by kinematic vertices
+//! ([`Constraints::aligned`]), is moved rigidly (Kabsch) onto $L(c)$, so it sits where an
+//! artist expects it; fixed vertices are already in world coordinates.
 //!
 //! The rig's own view of $P$ (with the rotation-aware prediction of
 //! [`rotation_predictor`](super::rotation_predictor) and thin bands placed on it) is the
@@ -36,22 +37,35 @@ pub(crate) fn linear(shapes: &ShapeSet, c: &[f64]) -> Vec<Point> {
     out
 }
 
-/// The predictor in solver coordinates, flattened (`3 #V`), from the linear blend `lin`.
-pub(crate) fn predict(constraints: &Constraints, lin: &[Point]) -> Vec<f64> {
-    let mut p = lin.to_vec();
+/// Positions `p` (world coordinates, `#V`) in solver coordinates, flattened (`3 #V`): each
+/// gauged component rotated into its gauge's frame, each [aligned](Constraints::aligned)
+/// component moved rigidly so that its held vertices best fit the linear blend `lin` (where
+/// the solver holds them; the identity when they are there already).
+pub(crate) fn predict(constraints: &Constraints, p: &[Point], lin: &[Point]) -> Vec<f64> {
+    let mut x = p.to_vec();
     for g in &constraints.gauges {
-        let frame = g.frame_for(lin);
+        let frame = g.frame_for(p);
         for &v in &g.vertices {
-            p[v as usize] = rotate_into(&frame, lin[v as usize]);
+            x[v as usize] = rotate_into(&frame, p[v as usize]);
         }
     }
-    p.into_iter().flatten().collect()
+    for a in &constraints.aligned {
+        let from: Vec<Point> = a.held.iter().map(|&v| p[v as usize]).collect();
+        let to: Vec<Point> = a.held.iter().map(|&v| lin[v as usize]).collect();
+        let fit = kabsch(&from, &to, &[]);
+        for &v in &a.vertices {
+            x[v as usize] = fit.apply(p[v as usize]);
+        }
+    }
+    x.into_iter().flatten().collect()
 }
 
-/// Solver coordinates back to world positions: gauged components aligned to `lin`.
+/// Solver coordinates back to world positions: gauged and aligned components moved rigidly
+/// onto `lin`.
 pub(crate) fn output(constraints: &Constraints, x: &[f64], lin: &[Point]) -> Vec<Point> {
     let mut p: Vec<Point> = x.chunks_exact(3).map(|v| [v[0], v[1], v[2]]).collect();
-    for comp in constraints.gauges.iter().map(|g| &g.vertices) {
+    let gauged = constraints.gauges.iter().map(|g| &g.vertices);
+    for comp in gauged.chain(constraints.aligned.iter().map(|a| &a.vertices)) {
         let from: Vec<Point> = comp.iter().map(|&v| p[v as usize]).collect();
         let to: Vec<Point> = comp.iter().map(|&v| lin[v as usize]).collect();
         let fit = kabsch(&from, &to, &[]);
@@ -79,7 +93,7 @@ impl Rig {
         start_from: Option<&[Point]>,
     ) -> Vec<f64> {
         let predicted = rotated.unwrap_or(lin);
-        let mut x = predict(&self.constraints, start_from.unwrap_or(predicted));
+        let mut x = predict(&self.constraints, start_from.unwrap_or(predicted), lin);
         if start_from.is_some() {
             for &v in &self.constraints.fixed {
                 let v = v as usize;
