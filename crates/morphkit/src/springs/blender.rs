@@ -196,6 +196,9 @@ impl PhysicalBlend {
             )));
         }
         let block_pattern = Arc::new(BlockPattern::new(n, &pairs));
+        for t in &mut terms {
+            t.bind(&block_pattern);
+        }
         let components = Components::from_pairs(n, pairs);
         let kinematic = stretched_vertices(shapes, o.kinematic_stretch);
         let bands = thin_bands(&topology, &components, o.thin_band_rings);

@@ -29,7 +29,9 @@
 //! Hinges are left out where the dihedral angle is ill defined in some shape: a face of
 //! (nearly) zero area, an edge of zero length, or a fold within `min_fold_margin` of ±π.
 
-use super::{Block, BlockHessian, EnergyTerm, HessianKind, TermParameters};
+use super::{
+    Block, BlockHessian, BlockPattern, EnergyTerm, HessianKind, PairSlots, TermParameters,
+};
 use crate::mesh::{ShapeSet, Topology};
 use nalgebra::{Matrix3, Vector3};
 use std::f64::consts::PI;
@@ -72,7 +74,13 @@ pub struct HingeTerm {
     /// Floors for extrapolated normal lengths.
     floor1: Vec<f64>,
     floor2: Vec<f64>,
+    /// The blocks of each hinge's six pairs (`PAIRS` order) in the solver's pattern.
+    slots: PairSlots,
 }
+
+/// The corner pairs `(u, v)`, `u < v`, of a hinge `[a, b, c, d]`, in the order of its slots:
+/// `(u, v)` is at `u (7 − u) / 2 + v − u − 1`.
+const PAIRS: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
 
 fn v3(x: &[f64], i: u32) -> Vector3<f64> {
     let i = 3 * i as usize;
@@ -125,6 +133,7 @@ impl HingeTerm {
             len2: vec![Vec::new(); shapes.len()],
             floor1: Vec::new(),
             floor2: Vec::new(),
+            slots: PairSlots::default(),
         };
         if mu <= 0.0 {
             return out;
@@ -257,12 +266,14 @@ impl HingeTerm {
     /// mapped to the corners by $e = b - a$, $u_1 = c - a$, $u_2 = d - a$. The tests check it
     /// against differences of the analytic gradient.
     fn add_exact_hessian(&self, p: &TermParameters, x: &[f64], h: &mut BlockHessian) {
+        let slots = self.slots.get(h);
         for k in 0..self.hinges.len() {
             let hv = self.hinges[k];
             let pos = hv.map(|v| v3(x, v));
             let (r, j) = self.residual_at(&p.values, k, pos);
             let hy = self.second_order(&p.values, k, pos, &r);
-            add_block_pairs(None, h, hv, &j, &hy, 2.0 * self.weight[k]);
+            let sl = slots.map(|s| &s[6 * k..6 * k + 6]);
+            add_block_pairs(None, (h, sl), hv, &j, &hy, 2.0 * self.weight[k]);
         }
     }
 
@@ -325,12 +336,27 @@ fn weighted(m: &Matrix3<f64>, w: f64) -> Block {
     std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]))
 }
 
+/// A Hessian and, when known, the slots of one hinge's six pairs in it (`PAIRS` order).
+type Target<'a, 'b> = (&'a mut BlockHessian, Option<&'b [u32]>);
+
+/// Adds block `b` of corners `(u, v)`, `u ≤ v`, of hinge `hv` to `h`.
+#[inline]
+fn add_corner_block(h: &mut Target<'_, '_>, hv: [u32; 4], u: usize, v: usize, b: &Block) {
+    let (i, j) = (hv[u] as usize, hv[v] as usize);
+    if u == v {
+        return h.0.add(i, i, b);
+    }
+    // Index of (u, v) in PAIRS.
+    let slot = h.1.map(|s| s[u * (7 - u) / 2 + v - u - 1]);
+    h.0.add_pair(slot, i, j, b);
+}
+
 /// Adds $w (J^\top J + M^\top H_y M)$ of one hinge to `exact` (`hy` holds the second-order
 /// blocks in the edge variables $(e, u_1, u_2) = (b - a, c - a, d - a)$, mapped to the corners
 /// by $M$) and, when given, the Gauss–Newton blocks $w J^\top J$ alone to `projected`.
 fn add_block_pairs(
-    mut projected: Option<&mut BlockHessian>,
-    exact: &mut BlockHessian,
+    mut projected: Option<Target<'_, '_>>,
+    mut exact: Target<'_, '_>,
     hv: [u32; 4],
     j: &[Matrix3<f64>; 4],
     hy: &[[Matrix3<f64>; 3]; 3],
@@ -344,8 +370,8 @@ fn add_block_pairs(
     for u in 0..4 {
         for v in u..4 {
             let jtj = j[u].transpose() * j[v];
-            if let Some(ph) = projected.as_deref_mut() {
-                ph.add(hv[u] as usize, hv[v] as usize, &weighted(&jtj, w));
+            if let Some(ph) = projected.as_mut() {
+                add_corner_block(ph, hv, u, v, &weighted(&jtj, w));
             }
             let mut blk = jtj;
             for (pp, mp) in MAP.iter().enumerate() {
@@ -357,7 +383,7 @@ fn add_block_pairs(
                 }
             }
             let b: Block = std::array::from_fn(|rr| std::array::from_fn(|cc| w * blk[(rr, cc)]));
-            exact.add(hv[u] as usize, hv[v] as usize, &b);
+            add_corner_block(&mut exact, hv, u, v, &b);
         }
     }
 }
@@ -369,12 +395,16 @@ impl EnergyTerm for HingeTerm {
 
     fn couplings(&self, out: &mut Vec<[u32; 2]>) {
         for h in &self.hinges {
-            for u in 0..4 {
-                for v in u + 1..4 {
-                    out.push([h[u], h[v]]);
-                }
-            }
+            out.extend(PAIRS.iter().map(|&(u, v)| [h[u], h[v]]));
         }
+    }
+
+    fn bind(&mut self, pattern: &std::sync::Arc<BlockPattern>) {
+        let pairs = self
+            .hinges
+            .iter()
+            .flat_map(|h| PAIRS.iter().map(move |&(u, v)| [h[u], h[v]]));
+        self.slots = PairSlots::new(pattern, pairs);
     }
 
     fn prepare(&self, c: &[f64]) -> TermParameters {
@@ -432,14 +462,16 @@ impl EnergyTerm for HingeTerm {
         if kind == HessianKind::Exact {
             return self.add_exact_hessian(p, x, h);
         }
+        let slots = self.slots.get(h);
         for k in 0..self.hinges.len() {
             let (_, j) = self.residual(&p.values, x, k);
             let w = 2.0 * self.weight[k];
             let hv = self.hinges[k];
+            let mut target = (&mut *h, slots.map(|s| &s[6 * k..6 * k + 6]));
             for u in 0..4 {
                 for v in u..4 {
                     let b = weighted(&(j[u].transpose() * j[v]), w);
-                    h.add(hv[u] as usize, hv[v] as usize, &b);
+                    add_corner_block(&mut target, hv, u, v, &b);
                 }
             }
         }
@@ -452,12 +484,20 @@ impl EnergyTerm for HingeTerm {
         projected: &mut BlockHessian,
         exact: &mut BlockHessian,
     ) {
+        let (sp, se) = (self.slots.get(projected), self.slots.get(exact));
         for k in 0..self.hinges.len() {
             let hv = self.hinges[k];
             let pos = hv.map(|v| v3(x, v));
             let (r, j) = self.residual_at(&p.values, k, pos);
             let hy = self.second_order(&p.values, k, pos, &r);
-            add_block_pairs(Some(projected), exact, hv, &j, &hy, 2.0 * self.weight[k]);
+            add_block_pairs(
+                Some((&mut *projected, sp.map(|s| &s[6 * k..6 * k + 6]))),
+                (&mut *exact, se.map(|s| &s[6 * k..6 * k + 6])),
+                hv,
+                &j,
+                &hy,
+                2.0 * self.weight[k],
+            );
         }
     }
 }

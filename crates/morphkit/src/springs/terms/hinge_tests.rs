@@ -1,5 +1,7 @@
 //! Tests of the parent module (kept apart so that the module itself stays one concept).
-use super::super::check::{dense_hessian, fused_hessians_match, gradient_error, hessian_error};
+use super::super::check::{
+    bound_hessians_match, dense_hessian, fused_hessians_match, gradient_error, hessian_error,
+};
 use super::*;
 use crate::mesh::generate;
 use rand::{Rng, SeedableRng};
@@ -51,6 +53,8 @@ fn gradient_matches_finite_differences_and_hessians_are_right() {
     let (err, gmax) = gradient_error(&term, &p, &x);
     assert!(err < 1e-7 * gmax.max(1.0), "FD error {err}, |g| {gmax}");
     assert!(fused_hessians_match(&term, &p, &x));
+    let mut term = term;
+    assert!(bound_hessians_match(&mut term, &p, &x));
     let exact = dense_hessian(&term, &p, &x, HessianKind::Exact);
     // The exact Hessian matches differences of the gradient.
     let worst = hessian_error(&term, &p, &x, &exact);

@@ -53,6 +53,10 @@ pub trait EnergyTerm: Send + Sync {
     /// Every vertex pair `(i, j)`, `i ≠ j`, whose Hessian block this term may write. Called
     /// once, at set-up.
     fn couplings(&self, out: &mut Vec<[u32; 2]>);
+    /// Called once with the pattern that the solver built from every term's couplings, before
+    /// any Hessian is asked for: a term may look up where its blocks go ([`PairSlots`]) instead
+    /// of searching the pattern for every block of every Hessian. Default: nothing.
+    fn bind(&mut self, _pattern: &std::sync::Arc<BlockPattern>) {}
     /// The parameters for affine shape coefficients `c` (`Σ c = 1`, one per shape). Must
     /// depend on `c` alone.
     fn prepare(&self, c: &[f64]) -> TermParameters;
@@ -152,6 +156,43 @@ impl BlockPattern {
     }
 }
 
+/// Where a term's off-diagonal blocks go in one [`BlockPattern`], looked up once
+/// ([`EnergyTerm::bind`]): per pair of the term, in the term's own order, the index of its
+/// block. Valid only for Hessians on that pattern ([`Self::get`] checks).
+#[derive(Clone, Debug, Default)]
+pub struct PairSlots {
+    pattern: Option<std::sync::Arc<BlockPattern>>,
+    slots: Vec<u32>,
+}
+
+impl PairSlots {
+    /// The blocks of `pairs` in `pattern`; every pair must be in it (declared by the term).
+    pub fn new(
+        pattern: &std::sync::Arc<BlockPattern>,
+        pairs: impl Iterator<Item = [u32; 2]>,
+    ) -> Self {
+        let slots = pairs
+            .map(|[a, b]| {
+                let (r, c) = (a.min(b) as usize, a.max(b) as usize);
+                pattern.pair_index(r, c).map_or(u32::MAX, |k| k as u32)
+            })
+            .collect();
+        Self {
+            pattern: Some(std::sync::Arc::clone(pattern)),
+            slots,
+        }
+    }
+
+    /// The slots, when `h` is on the pattern they were looked up in.
+    #[inline]
+    pub fn get(&self, h: &BlockHessian) -> Option<&[u32]> {
+        match &self.pattern {
+            Some(p) if std::sync::Arc::ptr_eq(p, &h.pattern) => Some(&self.slots),
+            _ => None,
+        }
+    }
+}
+
 /// Hessian values on a [`BlockPattern`]: one full 3×3 block per vertex (diagonal) and one per
 /// coupled pair `(i, j)`, `i < j`, holding $\partial^2 E/\partial x_i \partial x_j$.
 #[derive(Clone, Debug)]
@@ -198,6 +239,27 @@ impl BlockHessian {
         match self.pattern.pair_index(r, c) {
             Some(k) => add_block(&mut self.off[k], b, transpose),
             None => debug_assert!(false, "pair ({i}, {j}) was not declared"),
+        }
+    }
+}
+
+impl BlockHessian {
+    /// $H_{ij} \mathrel{+}= B$ for `i ≠ j` whose block is `slot` (from [`PairSlots`]; a
+    /// pair missing from the pattern, [`u32::MAX`], is dropped like in [`Self::add`]).
+    #[inline]
+    pub fn add_at(&mut self, slot: u32, i: usize, j: usize, b: &Block) {
+        match self.off.get_mut(slot as usize) {
+            Some(dst) => add_block(dst, b, i > j),
+            None => debug_assert!(false, "pair ({i}, {j}) was not declared"),
+        }
+    }
+
+    /// `add_at` with the slot when there is one, else [`Self::add`].
+    #[inline]
+    pub(crate) fn add_pair(&mut self, slot: Option<u32>, i: usize, j: usize, b: &Block) {
+        match slot {
+            Some(k) => self.add_at(k, i, j, b),
+            None => self.add(i, j, b),
         }
     }
 }
@@ -308,6 +370,32 @@ pub(crate) mod check {
         };
         let nonzero = fe.off.iter().flatten().flatten().any(|v| *v != 0.0);
         nonzero && same(&fp, &sp) && same(&fe, &se)
+    }
+
+    /// Whether the Hessians of `t` after [`EnergyTerm::bind`] to a pattern are, bit for bit,
+    /// those it writes without (by searching the pattern), both kinds and fused.
+    pub fn bound_hessians_match(t: &mut dyn EnergyTerm, p: &TermParameters, x: &[f64]) -> bool {
+        let mut pairs = Vec::new();
+        t.couplings(&mut pairs);
+        // Another term's pair too, so that the term's blocks are not the whole pattern.
+        pairs.push([0, (x.len() / 3 - 1) as u32]);
+        let pattern = std::sync::Arc::new(BlockPattern::new(x.len() / 3, &pairs));
+        let all = |t: &dyn EnergyTerm| {
+            let zeros = || BlockHessian::zeros(pattern.clone());
+            let (mut a, mut b, mut fp, mut fe) = (zeros(), zeros(), zeros(), zeros());
+            t.add_hessian(p, x, HessianKind::Projected, &mut a);
+            t.add_hessian(p, x, HessianKind::Exact, &mut b);
+            t.add_hessians(p, x, &mut fp, &mut fe);
+            [a, b, fp, fe]
+                .iter()
+                .flat_map(|h| h.diag.iter().chain(&h.off).flatten().flatten())
+                .map(|v| v.to_bits())
+                .collect::<Vec<u64>>()
+        };
+        let unbound = all(t);
+        t.bind(&pattern);
+        let bound = all(t);
+        unbound.iter().any(|&v| v != 0) && unbound == bound
     }
 
     /// Dense Hessian of `t` from its blocks.

@@ -16,7 +16,7 @@
 //! weight vector reproduces that shape's rest lengths exactly. Only extrapolated weights clamp,
 //! and the count is reported.
 
-use super::{BlockHessian, EnergyTerm, HessianKind, TermParameters};
+use super::{BlockHessian, EnergyTerm, HessianKind, PairSlots, TermParameters};
 use crate::springs::{SpringSet, StiffnessRule};
 
 /// The springs of a [`SpringSet`] as an energy term. Parameters: `[r̄ (m) | k (m)]`.
@@ -24,6 +24,8 @@ pub struct SpringTerm {
     set: SpringSet,
     rest_floor: Vec<f64>,
     stiffness_floor: Vec<f64>,
+    /// The block of each spring in the solver's pattern.
+    slots: PairSlots,
 }
 
 impl SpringTerm {
@@ -45,6 +47,7 @@ impl SpringTerm {
                 .map(|v| (min_rest_fraction * v).max(f64::MIN_POSITIVE * 1e10))
                 .collect(),
             set,
+            slots: PairSlots::default(),
         }
     }
 
@@ -115,10 +118,12 @@ fn block(u: [f64; 3], k: f64, t: f64) -> super::Block {
 
 /// Adds spring block `b` of `(i, j)`: `b` at both diagonal blocks, `−b` between them.
 #[inline]
-fn scatter(h: &mut BlockHessian, i: usize, j: usize, b: &super::Block) {
+/// Adds spring block `b` at `(i, i)`, `(j, j)` and `−b` at `(i, j)` (whose block is `slot`
+/// when known).
+fn scatter(h: &mut BlockHessian, slot: Option<u32>, i: usize, j: usize, b: &super::Block) {
     h.add(i, i, b);
     h.add(j, j, b);
-    h.add(i, j, &b.map(|row| row.map(|v| -v)));
+    h.add_pair(slot, i, j, &b.map(|row| row.map(|v| -v)));
 }
 
 impl EnergyTerm for SpringTerm {
@@ -128,6 +133,10 @@ impl EnergyTerm for SpringTerm {
 
     fn couplings(&self, out: &mut Vec<[u32; 2]>) {
         out.extend(self.set.springs().iter().map(|s| [s.i, s.j]));
+    }
+
+    fn bind(&mut self, pattern: &std::sync::Arc<super::BlockPattern>) {
+        self.slots = PairSlots::new(pattern, self.set.springs().iter().map(|s| [s.i, s.j]));
     }
 
     fn prepare(&self, c: &[f64]) -> TermParameters {
@@ -198,14 +207,12 @@ impl EnergyTerm for SpringTerm {
         let m = self.set.len();
         let (rest, k) = p.values.split_at(m);
         let projected = kind == HessianKind::Projected;
+        let slots = self.slots.get(h);
         for (q, s) in self.set.springs().iter().enumerate() {
             let (i, j) = (s.i as usize, s.j as usize);
-            scatter(
-                h,
-                i,
-                j,
-                &spring_block(diff(x, i, j), rest[q], k[q], projected),
-            );
+            let slot = slots.as_ref().map(|v| v[q]);
+            let b = spring_block(diff(x, i, j), rest[q], k[q], projected);
+            scatter(h, slot, i, j, &b);
         }
     }
 
@@ -218,18 +225,21 @@ impl EnergyTerm for SpringTerm {
     ) {
         let m = self.set.len();
         let (rest, k) = p.values.split_at(m);
+        let (sp, se) = (self.slots.get(projected), self.slots.get(exact));
         for (q, s) in self.set.springs().iter().enumerate() {
             let (i, j) = (s.i as usize, s.j as usize);
             let (bp, be) = spring_blocks(diff(x, i, j), rest[q], k[q]);
-            scatter(projected, i, j, &bp);
-            scatter(exact, i, j, &be);
+            scatter(projected, sp.as_ref().map(|v| v[q]), i, j, &bp);
+            scatter(exact, se.as_ref().map(|v| v[q]), i, j, &be);
         }
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::check::{dense_hessian, fused_hessians_match, gradient_error, hessian_error};
+    use super::super::check::{
+        bound_hessians_match, dense_hessian, fused_hessians_match, gradient_error, hessian_error,
+    };
     use super::*;
     use crate::mesh::{generate, ShapeSet, Topology};
     use crate::springs::SpringOptions;
@@ -275,6 +285,10 @@ mod tests {
         let (term, p, x) = setup(StiffnessRule::InverseRestLength);
         // Both Hessians in one pass equal two separate passes, bit for bit.
         assert!(fused_hessians_match(&term, &p, &x));
+        // Blocks placed by the slots of `bind` are the blocks placed by searching.
+        let mut bound = term;
+        assert!(bound_hessians_match(&mut bound, &p, &x));
+        let term = bound;
         let hm = dense_hessian(&term, &p, &x, HessianKind::Exact);
         let worst = hessian_error(&term, &p, &x, &hm);
         assert!(worst < 1e-6, "Hessian FD error {worst}");
