@@ -256,7 +256,11 @@ fn solver_variants_agree() {
     let d = bbox_diagonal(s.positions(0));
     let mut results = Vec::new();
     for linear_solver in [LinearSolver::Direct, LinearSolver::TrustRegion] {
-        for ordering in [FillOrdering::Amd, FillOrdering::NestedDissection] {
+        for ordering in [
+            FillOrdering::Amd,
+            FillOrdering::NestedDissection,
+            FillOrdering::Cheapest,
+        ] {
             let opts = BlendOptions {
                 linear_solver,
                 ordering,

@@ -107,6 +107,8 @@ fn time_sequence(
         "springs": solver.summary().springs,
         "free_dofs": solver.num_free_dofs(),
         "factor_nnz": solver.factor_nnz(),
+        "factor_flops": solver.summary().factor_flops,
+        "ordering": solver.summary().ordering,
         "setup_ms": setup * 1e3,
         "ms_per_step": per_step * 1e3,
         "newton_iterations_per_step": iters as f64 / steps as f64,
@@ -121,10 +123,12 @@ fn time_sequence(
         "threads": threads,
     });
     println!(
-        "{:<28} {:>7} {:>8} {:>9.1} {:>10.2} {:>7.2} {:>7.2} {:>7.1} {:>7} {:>9} {:>6.2}",
+        "{:<28} {:>7} {:>8} {:>6} {:>6.2} {:>9.1} {:>10.2} {:>7.2} {:>7.2} {:>7.1} {:>7} {:>9} {:>6.2}",
         name,
         shapes.num_vertices(),
         solver.summary().springs,
+        if solver.summary().ordering == "amd" { "amd" } else { "nd" },
+        solver.summary().factor_flops / 1e9,
         setup * 1e3,
         per_step * 1e3,
         iters as f64 / steps as f64,
@@ -164,10 +168,12 @@ fn springs_suite(data: Option<&Path>, seq: &Sequence) -> anyhow::Result<Vec<serd
     };
     println!("physical blend, {steps} steps of α in [0, 1], default options (tolerance 1e-6 · k0), {threads} thread(s), {start}");
     println!(
-        "{:<28} {:>7} {:>8} {:>9} {:>10} {:>7} {:>7} {:>7} {:>7} {:>9} {:>6}",
+        "{:<28} {:>7} {:>8} {:>6} {:>6} {:>9} {:>10} {:>7} {:>7} {:>7} {:>7} {:>9} {:>6}",
         "mesh",
         "verts",
         "springs",
+        "order",
+        "Gflop",
         "setup ms",
         "ms/step",
         "newton",

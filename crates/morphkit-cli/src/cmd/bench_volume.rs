@@ -72,7 +72,6 @@ fn row(
     steps: usize,
     threads: usize,
 ) -> anyhow::Result<serde_json::Value> {
-    let ordering = opts.ordering;
     let t0 = Instant::now();
     let mut v = VolumetricBlend::new(shapes, opts, interior, &AnchorOptions::default())?;
     let setup = t0.elapsed().as_secs_f64();
@@ -94,9 +93,9 @@ fn row(
     let rep = v.report();
     let n_total = rep.surface_vertices + rep.interior_vertices;
     let springs = v.physical().summary().springs + rep.internal_springs;
-    let order = match ordering {
-        FillOrdering::Amd => "amd",
-        FillOrdering::NestedDissection => "metis",
+    let order = match v.physical().summary().ordering {
+        "amd" => "amd",
+        _ => "metis",
     };
     println!(
         "{:<14} {:>8} {:>6} {:>7} {:>7} {:>8} {:>9.0} {:>10.1} {:>7.2} {:>9} {:>9.2e}",

@@ -129,6 +129,29 @@ impl SymmetricPattern {
     }
 }
 
+/// Multiply-adds of one numeric factorization with `symbolic` (see [`Cholesky::factor_flops`]).
+fn symbolic_flops(symbolic: &SymbolicCholesky<usize>) -> f64 {
+    use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let (begin, end) = (s.supernode_begin(), s.supernode_end());
+            let rows = s.col_ptr_for_row_idx();
+            (0..s.n_supernodes())
+                .map(|k| {
+                    let w = (end[k] - begin[k]) as f64;
+                    let r = (rows[k + 1] - rows[k]) as f64;
+                    w * w * w / 3.0 + w * w * r + w * r * r
+                })
+                .sum()
+        }
+        SymbolicCholeskyRaw::Simplicial(s) => s
+            .col_ptr()
+            .windows(2)
+            .map(|c| ((c[1] - c[0]) as f64).powi(2))
+            .sum(),
+    }
+}
+
 /// A zeroed buffer whose first element is 64-byte aligned, whatever the allocator returns.
 /// faer's SIMD kernels take different head/tail paths for different alignments, and so round
 /// differently: with every buffer aligned the same way, a factorization and a solve give the
@@ -245,6 +268,31 @@ impl Cholesky {
     ) -> Result<Self, SolveError> {
         let symbolic = Self::analyze_symbolic(&pattern, ordering)?;
         Self::with_buffers(pattern, Arc::new(symbolic), precision)
+    }
+
+    /// Like [`analyze_shared`](Self::analyze_shared) with the cheapest of `orderings`: the one
+    /// whose factorization takes the fewest multiply-adds ([`Self::factor_flops`]; the first
+    /// of equals). Returns the solver and the index of the ordering. Only the chosen one gets
+    /// numeric buffers.
+    pub fn analyze_cheapest(
+        pattern: Arc<SymmetricPattern>,
+        orderings: &[Ordering],
+        precision: Precision,
+    ) -> Result<(Self, usize), SolveError> {
+        let mut best: Option<(SymbolicCholesky<usize>, f64, usize)> = None;
+        for (k, ordering) in orderings.iter().enumerate() {
+            let symbolic = Self::analyze_symbolic(&pattern, ordering.clone())?;
+            let flops = symbolic_flops(&symbolic);
+            if best.as_ref().is_none_or(|b| flops < b.1) {
+                best = Some((symbolic, flops, k));
+            }
+        }
+        let (symbolic, _, k) = best
+            .ok_or_else(|| SolveError::Backend("no ordering to analyse the pattern with".into()))?;
+        Ok((
+            Self::with_buffers(pattern, Arc::new(symbolic), precision)?,
+            k,
+        ))
     }
 
     fn analyze_symbolic(
@@ -422,6 +470,15 @@ impl Cholesky {
     /// Number of stored entries of the factor $L$ (a measure of fill and memory).
     pub fn factor_nnz(&self) -> usize {
         self.l_values.len.max(self.l_single.len)
+    }
+
+    /// Multiply-adds of one numeric factorization, from the symbolic structure: per
+    /// supernode of $w$ columns with $r$ rows below its diagonal block, $w^3/3$ for the
+    /// diagonal block, $w^2 r$ for the panel below it and $w r^2$ for its update of the rest
+    /// (per column $c^2$ for a simplicial factor, $c$ its entries). An ordering's cost,
+    /// independent of the machine and its load.
+    pub fn factor_flops(&self) -> f64 {
+        symbolic_flops(&self.symbolic)
     }
 
     /// The arithmetic of the stored factor.

@@ -209,7 +209,9 @@ impl PhysicalBlend {
         summary.band_vertices = constraints.bands.len();
         summary.gauged_components = constraints.gauges.len() + constraints.aligned.len();
         let vertex_order = match o.ordering {
-            FillOrdering::NestedDissection => Some(vertex_nested_dissection(&block_pattern)?),
+            FillOrdering::NestedDissection | FillOrdering::Cheapest => {
+                Some(vertex_nested_dissection(&block_pattern)?)
+            }
             FillOrdering::Amd => None,
         };
         summary.predicted_bytes =
@@ -235,13 +237,24 @@ impl PhysicalBlend {
         for &v in &constraints.bands {
             is_fixed[v as usize] = false;
         }
-        let ordering = match &vertex_order {
-            Some(order) => Ordering::Custom(expand_vertex_order(order, &system.dof_index)),
-            None => Ordering::Amd,
+        let mut orderings = Vec::with_capacity(2);
+        if let Some(order) = &vertex_order {
+            orderings.push(Ordering::Custom(expand_vertex_order(
+                order,
+                &system.dof_index,
+            )));
+        }
+        if vertex_order.is_none() || o.ordering == FillOrdering::Cheapest {
+            orderings.push(Ordering::Amd);
+        }
+        let (chol, chosen) = system.analyze(&orderings, o.factor_precision)?;
+        summary.ordering = match orderings[chosen] {
+            Ordering::Amd => "amd",
+            _ => "nested dissection",
         };
-        let chol = system.analyze(ordering, o.factor_precision)?;
         summary.free_dofs = system.num_free();
         summary.factor_nnz = chol.factor_nnz();
+        summary.factor_flops = chol.factor_flops();
         let nnz = system.pattern.nnz();
         let ws = Workspace::new(chol, BlockHessian::zeros(block_pattern), nnz);
         Ok(Self {

@@ -141,13 +141,14 @@ impl FreeSystem {
             .fold(0.0, |m, (v, _)| m.max(v.abs()))
     }
 
-    /// Symbolic analysis of the scalar pattern with `ordering`.
+    /// Symbolic analysis of the scalar pattern with the cheapest of `orderings` (fewest
+    /// multiply-adds per factorization, the first of equals), and its index.
     pub fn analyze(
         &self,
-        ordering: Ordering,
+        orderings: &[Ordering],
         precision: Precision,
-    ) -> Result<Cholesky, SolveError> {
-        Cholesky::analyze_shared(Arc::clone(&self.pattern), ordering, precision)
+    ) -> Result<(Cholesky, usize), SolveError> {
+        Cholesky::analyze_cheapest(Arc::clone(&self.pattern), orderings, precision)
     }
 }
 
