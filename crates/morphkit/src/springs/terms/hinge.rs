@@ -362,28 +362,22 @@ fn add_block_pairs(
     hy: &[[Matrix3<f64>; 3]; 3],
     w: f64,
 ) {
-    const MAP: [[f64; 4]; 3] = [
-        [-1.0, 1.0, 0.0, 0.0],
-        [-1.0, 0.0, 1.0, 0.0],
-        [-1.0, 0.0, 0.0, 1.0],
-    ];
+    // M^T H_y M at the corners: b, c, d are the edge variables e, u1, u2, and a is minus
+    // their sum, so the (a, ·) blocks are minus column sums of H_y and (a, a) is its total.
+    let col: [Matrix3<f64>; 3] = std::array::from_fn(|q| hy[0][q] + hy[1][q] + hy[2][q]);
+    let total = col[0] + col[1] + col[2];
     for u in 0..4 {
         for v in u..4 {
             let jtj = j[u].transpose() * j[v];
             if let Some(ph) = projected.as_mut() {
                 add_corner_block(ph, hv, u, v, &weighted(&jtj, w));
             }
-            let mut blk = jtj;
-            for (pp, mp) in MAP.iter().enumerate() {
-                for (qq, mq) in MAP.iter().enumerate() {
-                    let s = mp[u] * mq[v];
-                    if s != 0.0 {
-                        blk += hy[pp][qq] * s;
-                    }
-                }
-            }
-            let b: Block = std::array::from_fn(|rr| std::array::from_fn(|cc| w * blk[(rr, cc)]));
-            add_corner_block(&mut exact, hv, u, v, &b);
+            let second = match (u, v) {
+                (0, 0) => total,
+                (0, v) => -col[v - 1],
+                (u, v) => hy[u - 1][v - 1],
+            };
+            add_corner_block(&mut exact, hv, u, v, &weighted(&(jtj + second), w));
         }
     }
 }
