@@ -375,14 +375,7 @@ fn a_component_held_only_by_kinematic_vertices_is_aligned_as_a_whole() {
     for a in 1..3 {
         bent[spike][a] *= 25.0;
     }
-    let s = ShapeSet::new(
-        m.clone(),
-        vec![
-            ("straight".into(), m.positions.clone()),
-            ("bent".into(), bent),
-        ],
-    )
-    .unwrap();
+    let s = common::two_shapes(&m, "straight", ("bent", bent));
     let options = BlendOptions {
         fixed: FixedVertices::None,
         ..Default::default()

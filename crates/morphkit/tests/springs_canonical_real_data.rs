@@ -137,14 +137,7 @@ fn cylinders_and_bent_armadillo_endpoints() {
     let (lo, hi) = arm.bounding_box();
     let mid = 0.5 * (lo[0] + hi[0]);
     let bent = generate::bend(&arm.positions, mid, hi[0] - mid, 60f64.to_radians());
-    let s = ShapeSet::new(
-        arm.clone(),
-        vec![
-            ("armadillo".into(), arm.positions.clone()),
-            ("bent".into(), bent),
-        ],
-    )
-    .unwrap();
+    let s = common::two_shapes(&arm, "armadillo", ("bent", bent));
     let mut solver = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap();
     check_endpoints("armadillo", &mut solver);
 }

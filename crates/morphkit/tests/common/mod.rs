@@ -96,15 +96,21 @@ pub fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 /// A closed bar (4 × 0.6 × 0.6, 16 segments) and the same bar bent by 90° over its second
 /// half: its first half moves in no shape, so `FixedVertices::Auto` fixes it.
 pub fn bent_bar() -> morphkit::mesh::ShapeSet {
-    use morphkit::mesh::{generate, ShapeSet};
+    use morphkit::mesh::generate;
     let bar = generate::bar(4.0, 0.6, 2, 16);
     let bent = generate::bend(&bar.positions, 2.0, 2.0, std::f64::consts::FRAC_PI_2);
-    ShapeSet::new(
-        bar.clone(),
-        vec![
-            ("straight".into(), bar.positions.clone()),
-            ("bent".into(), bent),
-        ],
+    two_shapes(&bar, "straight", ("bent", bent))
+}
+
+/// `mesh` as the base shape named `base`, and one target on its connectivity.
+pub fn two_shapes(
+    mesh: &morphkit::mesh::TriMesh,
+    base: &str,
+    (name, target): (&str, Vec<morphkit::mesh::Point>),
+) -> morphkit::mesh::ShapeSet {
+    morphkit::mesh::ShapeSet::new(
+        mesh.clone(),
+        vec![(base.into(), mesh.positions.clone()), (name.into(), target)],
     )
     .unwrap()
 }
