@@ -19,10 +19,12 @@ mod cholesky;
 mod dirichlet;
 mod matrix;
 pub mod metis;
+mod pattern;
 
-pub use cholesky::{Cholesky, Ordering, Precision, SymmetricPattern};
+pub use cholesky::{Cholesky, Ordering, Precision};
 pub use dirichlet::Dirichlet;
 pub use matrix::SparseMatrix;
+pub use pattern::SymmetricPattern;
 
 /// Why a sparse solve failed.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]

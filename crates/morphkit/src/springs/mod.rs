@@ -77,6 +77,7 @@
 mod blender;
 mod constraints;
 pub mod continuity;
+mod gauge;
 pub mod interior;
 pub mod metrics;
 mod newton;

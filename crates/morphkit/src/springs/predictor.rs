@@ -17,7 +17,7 @@
 //! `impl Rig` block at the end.
 
 use super::blender::Rig;
-use super::constraints::rotate_into;
+use super::gauge::rotate_into;
 use super::Constraints;
 use crate::geom::kabsch;
 use crate::mesh::{Point, ShapeSet};
