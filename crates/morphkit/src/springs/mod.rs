@@ -223,5 +223,5 @@ pub enum BlendError {
 }
 
 fn gib(b: u64) -> String {
-    format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
+    format!("{:.2} GiB", b as f64 / (1u64 << 30) as f64)
 }
