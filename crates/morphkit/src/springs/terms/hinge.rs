@@ -217,20 +217,43 @@ impl HingeTerm {
         self.residual_at(p, k, self.hinges[k].map(|v| v3(x, v)))
     }
 
+    /// The quantities of hinge `k` at corner positions `pos` that ρ and its derivatives share.
+    fn local(&self, p: &[f64], k: usize, [a, b, c, _]: [Vector3<f64>; 4]) -> Local {
+        let (cs, sn, ib1, ib2) = (p[4 * k], p[4 * k + 1], p[4 * k + 2], p[4 * k + 3]);
+        let e = b - a;
+        let le = e.norm().max(f64::MIN_POSITIVE);
+        Local {
+            cs,
+            sn,
+            ib1,
+            ib2,
+            e,
+            le,
+            eh: e / le,
+            n1: e.cross(&(c - a)),
+        }
+    }
+
     /// Residual and Jacobian of hinge `k` at corner positions `[a, b, c, d]`.
     fn residual_at(
         &self,
         p: &[f64],
         k: usize,
-        [a, b, c, d]: [Vector3<f64>; 4],
+        pos: [Vector3<f64>; 4],
     ) -> (Vector3<f64>, [Matrix3<f64>; 4]) {
-        let (cs, sn, ib1, ib2) = (p[4 * k], p[4 * k + 1], p[4 * k + 2], p[4 * k + 3]);
-        let e = b - a;
-        let le = e.norm().max(f64::MIN_POSITIVE);
-        let eh = e / le;
-        let n1 = e.cross(&(c - a));
-        let n2 = (d - a).cross(&e);
-        let rho = n2 * ib2 - (n1 * cs + eh.cross(&n1) * sn) * ib1;
+        let [a, b, c, d] = pos;
+        let l = self.local(p, k, pos);
+        let Local {
+            cs,
+            sn,
+            ib1,
+            ib2,
+            e,
+            le,
+            eh,
+            n1,
+        } = l;
+        let rho = l.rho(d - a);
         // R(Θ̄)[w]× with R = cos Θ̄ I + sin Θ̄ [ê]×, using [ê]×[w]× = w êᵀ − (ê·w) I.
         let rot_skew = |w: Vector3<f64>| {
             skew(&w) * cs + (w * eh.transpose() - Matrix3::identity() * eh.dot(&w)) * sn
@@ -244,6 +267,63 @@ impl HingeTerm {
             -skew(&e) * ib2,
         ];
         (rho, j)
+    }
+
+    /// Residual ρ of hinge `k` at `x` and the gradient blocks $J_u^\top \rho$ of
+    /// $\lVert\rho\rVert^2 / 2$ per corner, without forming $J$ (the transposes of the blocks in
+    /// [`Self::residual_at`] applied to ρ: $[w]_\times^\top \rho = \rho \times w$).
+    fn residual_pullback(
+        &self,
+        p: &[f64],
+        x: &[f64],
+        k: usize,
+    ) -> (Vector3<f64>, [Vector3<f64>; 4]) {
+        let pos = self.hinges[k].map(|v| v3(x, v));
+        let [a, b, c, d] = pos;
+        let l = self.local(p, k, pos);
+        let Local {
+            cs,
+            sn,
+            ib1,
+            ib2,
+            e,
+            le,
+            eh,
+            n1,
+        } = l;
+        let r = l.rho(d - a);
+        // R(Θ̄)[w]×, transposed, applied to r.
+        let rot_t = |w: Vector3<f64>| r.cross(&w) * cs + (eh * w.dot(&r) - r * eh.dot(&w)) * sn;
+        let np_t = (r.cross(&n1) - eh * n1.cross(&eh).dot(&r)) * (sn / le);
+        let g = [
+            r.cross(&(b - d)) * ib2 - (rot_t(c - b) + np_t) * ib1,
+            r.cross(&(d - a)) * ib2 + (rot_t(c - a) + np_t) * ib1,
+            -rot_t(e) * ib1,
+            -r.cross(&e) * ib2,
+        ];
+        (r, g)
+    }
+}
+
+/// What ρ of one hinge and its derivatives share: the blended parameters (cos Θ̄, sin Θ̄,
+/// 1/β̄₁, 1/β̄₂), the hinge edge `e = b − a`, its length and direction, and $n_1 = e \times (c - a)$.
+#[derive(Clone, Copy)]
+struct Local {
+    cs: f64,
+    sn: f64,
+    ib1: f64,
+    ib2: f64,
+    e: Vector3<f64>,
+    le: f64,
+    eh: Vector3<f64>,
+    n1: Vector3<f64>,
+}
+
+impl Local {
+    /// $\rho = \beta_2^{-1} n_2 - \beta_1^{-1} R(\bar\Theta) n_1$ with $n_2 = u_2 \times e$.
+    fn rho(&self, u2: Vector3<f64>) -> Vector3<f64> {
+        let n2 = u2.cross(&self.e);
+        n2 * self.ib2 - (self.n1 * self.cs + self.eh.cross(&self.n1) * self.sn) * self.ib1
     }
 }
 
@@ -431,18 +511,22 @@ impl EnergyTerm for HingeTerm {
 
     fn energy(&self, p: &TermParameters, x: &[f64]) -> f64 {
         (0..self.hinges.len())
-            .map(|k| self.weight[k] * self.residual(&p.values, x, k).0.norm_squared())
+            .map(|k| {
+                let pos = self.hinges[k].map(|v| v3(x, v));
+                let l = self.local(&p.values, k, pos);
+                self.weight[k] * l.rho(pos[3] - pos[0]).norm_squared()
+            })
             .sum()
     }
 
     fn add_gradient(&self, p: &TermParameters, x: &[f64], g: &mut [f64]) -> f64 {
         let mut e = 0.0;
         for k in 0..self.hinges.len() {
-            let (rho, j) = self.residual(&p.values, x, k);
+            let (rho, jt_rho) = self.residual_pullback(&p.values, x, k);
             let w = self.weight[k];
             e += w * rho.norm_squared();
-            for (v, jv) in self.hinges[k].iter().zip(&j) {
-                let gv = jv.transpose() * rho * (2.0 * w);
+            for (v, jv) in self.hinges[k].iter().zip(&jt_rho) {
+                let gv = jv * (2.0 * w);
                 let i = 3 * *v as usize;
                 g[i] += gv.x;
                 g[i + 1] += gv.y;

@@ -236,3 +236,37 @@ fn a_mirror_flip_costs_energy_and_a_rotation_does_not() {
     let turned = generate::rotate(&fold(0.5), [0.3, 0.2, 0.1], [1.0, 2.0, 3.0], 2.0);
     assert!(term.energy(&p, &flat(turned)) < 1e-20);
 }
+
+#[test]
+fn the_gradient_pass_equals_the_jacobian_transposed_times_the_residual() {
+    // `residual_pullback` applies the transposed blocks of `residual_at` to ρ without forming
+    // them; both must agree, and so must the energy pass, on every hinge of a perturbed,
+    // half-blended tube.
+    let (term, set) = setup();
+    let p = term.prepare(&[0.3, 0.7]);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let x: Vec<f64> = set
+        .positions(1)
+        .iter()
+        .flatten()
+        .map(|v| v + rng.random_range(-0.1..0.1))
+        .collect();
+    let mut energy = 0.0;
+    for k in 0..term.len() {
+        let (rho, j) = term.residual(&p.values, &x, k);
+        let (r, g) = term.residual_pullback(&p.values, &x, k);
+        assert!((rho - r).norm() <= 1e-14 * rho.norm().max(1.0), "hinge {k}");
+        assert!(rho.norm() > 1e-6, "hinge {k}: the test needs a residual");
+        for u in 0..4 {
+            let want = j[u].transpose() * rho;
+            let err = (want - g[u]).norm();
+            assert!(
+                err <= 1e-12 * want.norm().max(1e-300).max(rho.norm()),
+                "hinge {k}, corner {u}: {err}"
+            );
+        }
+        energy += term.weight[k] * rho.norm_squared();
+    }
+    let e = term.energy(&p, &x);
+    assert!((e - energy).abs() <= 1e-12 * energy, "{e} vs {energy}");
+}
