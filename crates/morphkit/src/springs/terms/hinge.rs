@@ -243,23 +243,14 @@ impl HingeTerm {
     ) -> (Vector3<f64>, [Matrix3<f64>; 4]) {
         let [a, b, c, d] = pos;
         let l = self.local(p, k, pos);
-        let Local {
-            cs,
-            sn,
-            ib1,
-            ib2,
-            e,
-            le,
-            eh,
-            n1,
-        } = l;
+        let (cs, sn, ib1, ib2, e, eh, n1) = (l.cs, l.sn, l.ib1, l.ib2, l.e, l.eh, l.n1);
         let rho = l.rho(d - a);
         // R(Θ̄)[w]× with R = cos Θ̄ I + sin Θ̄ [ê]×, using [ê]×[w]× = w êᵀ − (ê·w) I.
         let rot_skew = |w: Vector3<f64>| {
             skew(&w) * cs + (w * eh.transpose() - Matrix3::identity() * eh.dot(&w)) * sn
         };
         // sin Θ̄ [n₁]× ∂ê/∂b, with ∂ê/∂b = (I − ê êᵀ)/‖e‖ = −∂ê/∂a.
-        let np = (skew(&n1) - n1.cross(&eh) * eh.transpose()) * (sn / le);
+        let np = (skew(&n1) - n1.cross(&eh) * eh.transpose()) * (sn / l.le);
         let j = [
             skew(&(b - d)) * ib2 - (rot_skew(c - b) + np) * ib1,
             skew(&(d - a)) * ib2 + (rot_skew(c - a) + np) * ib1,
@@ -281,20 +272,11 @@ impl HingeTerm {
         let pos = self.hinges[k].map(|v| v3(x, v));
         let [a, b, c, d] = pos;
         let l = self.local(p, k, pos);
-        let Local {
-            cs,
-            sn,
-            ib1,
-            ib2,
-            e,
-            le,
-            eh,
-            n1,
-        } = l;
         let r = l.rho(d - a);
+        let (cs, sn, ib1, ib2, e, eh, n1) = (l.cs, l.sn, l.ib1, l.ib2, l.e, l.eh, l.n1);
         // R(Θ̄)[w]×, transposed, applied to r.
         let rot_t = |w: Vector3<f64>| r.cross(&w) * cs + (eh * w.dot(&r) - r * eh.dot(&w)) * sn;
-        let np_t = (r.cross(&n1) - eh * n1.cross(&eh).dot(&r)) * (sn / le);
+        let np_t = (r.cross(&n1) - eh * n1.cross(&eh).dot(&r)) * (sn / l.le);
         let g = [
             r.cross(&(b - d)) * ib2 - (rot_t(c - b) + np_t) * ib1,
             r.cross(&(d - a)) * ib2 + (rot_t(c - a) + np_t) * ib1,

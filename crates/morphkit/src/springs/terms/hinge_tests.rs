@@ -19,6 +19,17 @@ fn setup() -> (HingeTerm, ShapeSet) {
     (term, set)
 }
 
+/// Shape `shape` of `set`, flattened, each coordinate moved by a uniform draw in
+/// `[-amp, amp)` (seeded).
+fn perturbed(set: &ShapeSet, shape: usize, seed: u64, amp: f64) -> Vec<f64> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    set.positions(shape)
+        .iter()
+        .flatten()
+        .map(|v| v + rng.random_range(-amp..amp))
+        .collect()
+}
+
 #[test]
 fn every_interior_edge_gets_a_hinge_and_each_shape_has_zero_energy() {
     let (term, set) = setup();
@@ -43,13 +54,7 @@ fn every_interior_edge_gets_a_hinge_and_each_shape_has_zero_energy() {
 fn gradient_matches_finite_differences_and_hessians_are_right() {
     let (term, set) = setup();
     let p = term.prepare(&[0.5, 0.5]);
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-    let x: Vec<f64> = set
-        .positions(0)
-        .iter()
-        .flatten()
-        .map(|v| v + rng.random_range(-0.05..0.05))
-        .collect();
+    let x = perturbed(&set, 0, 3, 0.05);
     let (err, gmax) = gradient_error(&term, &p, &x);
     assert!(err < 1e-7 * gmax.max(1.0), "FD error {err}, |g| {gmax}");
     assert!(fused_hessians_match(&term, &p, &x));
@@ -87,13 +92,7 @@ fn the_closed_form_hessian_holds_far_from_the_shapes() {
         (7, 0.2, [0.2, 0.8]),
     ] {
         let p = term.prepare(&c);
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let x: Vec<f64> = set
-            .positions(1)
-            .iter()
-            .flatten()
-            .map(|v| v + rng.random_range(-amp..amp))
-            .collect();
+        let x = perturbed(&set, 1, seed, amp);
         let exact = dense_hessian(&term, &p, &x, HessianKind::Exact);
         let worst = hessian_error(&term, &p, &x, &exact);
         let scale = exact.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -244,13 +243,7 @@ fn the_gradient_pass_equals_the_jacobian_transposed_times_the_residual() {
     // half-blended tube.
     let (term, set) = setup();
     let p = term.prepare(&[0.3, 0.7]);
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-    let x: Vec<f64> = set
-        .positions(1)
-        .iter()
-        .flatten()
-        .map(|v| v + rng.random_range(-0.1..0.1))
-        .collect();
+    let x = perturbed(&set, 1, 11, 0.1);
     let mut energy = 0.0;
     for k in 0..term.len() {
         let (rho, j) = term.residual(&p.values, &x, k);
