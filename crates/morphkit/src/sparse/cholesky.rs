@@ -23,13 +23,16 @@ fn symbolic_flops(symbolic: &SymbolicCholesky<usize>) -> f64 {
                     let r = (rows[k + 1] - rows[k]) as f64;
                     w * w * w / 3.0 + w * w * r + w * r * r
                 })
-                .sum()
+                .sum::<f64>()
+                + 0.0 // an empty sum is -0.0
         }
-        SymbolicCholeskyRaw::Simplicial(s) => s
-            .col_ptr()
-            .windows(2)
-            .map(|c| ((c[1] - c[0]) as f64).powi(2))
-            .sum(),
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            s.col_ptr()
+                .windows(2)
+                .map(|c| ((c[1] - c[0]) as f64).powi(2))
+                .sum::<f64>()
+                + 0.0
+        }
     }
 }
 
@@ -153,18 +156,26 @@ impl Cholesky {
 
     /// Like [`analyze_shared`](Self::analyze_shared) with the cheapest of `orderings`: the one
     /// whose factorization takes the fewest multiply-adds ([`Self::factor_flops`]; the first
-    /// of equals). Returns the solver and the index of the ordering. Only the chosen one gets
-    /// numeric buffers.
+    /// of equals) among those whose factor has no more entries than the first ordering's. The
+    /// first ordering is the memory reference: a caller that estimated its memory with it
+    /// (as the physical blend's `--max-memory` check does) is never handed a larger factor.
+    /// Returns the solver and the index of the ordering. Only the chosen one gets numeric
+    /// buffers.
     pub fn analyze_cheapest(
         pattern: Arc<SymmetricPattern>,
         orderings: &[Ordering],
         precision: Precision,
     ) -> Result<(Self, usize), SolveError> {
         let mut best: Option<(SymbolicCholesky<usize>, f64, usize)> = None;
+        let mut reference_entries = usize::MAX;
         for (k, ordering) in orderings.iter().enumerate() {
             let symbolic = Self::analyze_symbolic(&pattern, ordering.clone())?;
             let flops = symbolic_flops(&symbolic);
-            if best.as_ref().is_none_or(|b| flops < b.1) {
+            let entries = symbolic.len_val();
+            if k == 0 {
+                reference_entries = entries;
+            }
+            if entries <= reference_entries && best.as_ref().is_none_or(|b| flops < b.1) {
                 best = Some((symbolic, flops, k));
             }
         }

@@ -220,3 +220,46 @@ fn the_cheapest_ordering_is_kept() {
     }
     assert!(Cholesky::analyze_cheapest(p, &[], Precision::Double).is_err());
 }
+
+#[test]
+fn the_cheapest_ordering_never_has_more_entries_than_the_first() {
+    // Among random orderings of a random sparse matrix, find one pair where the second
+    // ordering takes fewer multiply-adds but stores more entries than the first: the first is
+    // the memory reference, so it is kept; swapped, the cheaper one is the reference and wins.
+    let n = 60;
+    let (p, _) = SymmetricPattern::from_triplets(n, &random_spd(n, 5)).unwrap();
+    let p = Arc::new(p);
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let measure = |perm: &[usize]| {
+        let c = Cholesky::analyze_shared(
+            p.clone(),
+            Ordering::Custom(perm.to_vec()),
+            Precision::Double,
+        )
+        .unwrap();
+        (c.factor_flops(), c.factor_nnz())
+    };
+    let random_perm = |rng: &mut ChaCha8Rng| {
+        let mut perm: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            perm.swap(i, rng.random_range(0..=i));
+        }
+        perm
+    };
+    let perms: Vec<Vec<usize>> = (0..60).map(|_| random_perm(&mut rng)).collect();
+    let costs: Vec<(f64, usize)> = perms.iter().map(|q| measure(q)).collect();
+    let pair = (0..perms.len())
+        .flat_map(|i| (0..perms.len()).map(move |j| (i, j)))
+        .find(|&(i, j)| costs[j].0 < costs[i].0 && costs[j].1 > costs[i].1);
+    let (i, j) = pair.expect("no pair of orderings trades flops against entries");
+    let orders = |a: usize, b: usize| {
+        vec![
+            Ordering::Custom(perms[a].clone()),
+            Ordering::Custom(perms[b].clone()),
+        ]
+    };
+    let (c, k) = Cholesky::analyze_cheapest(p.clone(), &orders(i, j), Precision::Double).unwrap();
+    assert_eq!((k, c.factor_nnz()), (0, costs[i].1));
+    let (c, k) = Cholesky::analyze_cheapest(p.clone(), &orders(j, i), Precision::Double).unwrap();
+    assert_eq!((k, c.factor_flops()), (0, costs[j].0));
+}
