@@ -116,10 +116,9 @@ fn block(u: [f64; 3], k: f64, t: f64) -> super::Block {
     b
 }
 
-/// Adds spring block `b` of `(i, j)`: `b` at both diagonal blocks, `−b` between them.
-#[inline]
 /// Adds spring block `b` at `(i, i)`, `(j, j)` and `−b` at `(i, j)` (whose block is `slot`
 /// when known).
+#[inline]
 fn scatter(h: &mut BlockHessian, slot: Option<u32>, i: usize, j: usize, b: &super::Block) {
     h.add(i, i, b);
     h.add(j, j, b);
