@@ -9,7 +9,7 @@
 use crate::outputs::{Kind, Plan};
 use morphkit::mesh::{generate, ShapeSet};
 use morphkit::springs::{
-    linear_blend, BlendOptions, ContinuityCheck, PhysicalBlend, Weights, JUMP_BOUND,
+    linear_blend, BlendOptions, ContinuityCheck, FillOrdering, PhysicalBlend, Weights, JUMP_BOUND,
 };
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -127,7 +127,10 @@ fn time_sequence(
         name,
         shapes.num_vertices(),
         solver.summary().springs,
-        if solver.summary().ordering == "amd" { "amd" } else { "nd" },
+        match solver.summary().ordering {
+            FillOrdering::Amd => "amd",
+            _ => "nd",
+        },
         solver.summary().factor_flops / 1e9,
         setup * 1e3,
         per_step * 1e3,

@@ -94,7 +94,7 @@ fn row(
     let n_total = rep.surface_vertices + rep.interior_vertices;
     let springs = v.physical().summary().springs + rep.internal_springs;
     let order = match v.physical().summary().ordering {
-        "amd" => "amd",
+        FillOrdering::Amd => "amd",
         _ => "metis",
     };
     println!(

@@ -249,8 +249,8 @@ impl PhysicalBlend {
         }
         let (chol, chosen) = system.analyze(&orderings, o.factor_precision)?;
         summary.ordering = match orderings[chosen] {
-            Ordering::Amd => "amd",
-            _ => "nested dissection",
+            Ordering::Amd => FillOrdering::Amd,
+            _ => FillOrdering::NestedDissection,
         };
         summary.free_dofs = system.num_free();
         summary.factor_nnz = chol.factor_nnz();

@@ -141,22 +141,19 @@ impl Constraints {
                 .filter(|&&v| is_fixed[v as usize])
                 .map(|&v| base[v as usize])
                 .collect();
-            let held: Vec<Point> = verts
-                .iter()
-                .filter(|&&v| is_fixed[v as usize] || is_kinematic[v as usize])
-                .map(|&v| base[v as usize])
-                .collect();
             if spans_plane(&fixed_here, 1e-9 * diag) {
                 continue;
             }
-            if !explicit_here(explicit, &fixed_here) && spans_plane(&held, 1e-9 * diag) {
+            let held: Vec<u32> = verts
+                .iter()
+                .copied()
+                .filter(|&v| is_fixed[v as usize] || is_kinematic[v as usize])
+                .collect();
+            let held_at: Vec<Point> = held.iter().map(|&v| base[v as usize]).collect();
+            if !explicit_here(explicit, &fixed_here) && spans_plane(&held_at, 1e-9 * diag) {
                 aligned.push(AlignedComponent {
                     vertices: verts.clone(),
-                    held: verts
-                        .iter()
-                        .copied()
-                        .filter(|&v| is_fixed[v as usize] || is_kinematic[v as usize])
-                        .collect(),
+                    held,
                 });
                 continue;
             }

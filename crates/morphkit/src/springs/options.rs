@@ -147,7 +147,8 @@ pub enum Predictor {
 }
 
 /// Fill-reducing ordering for the Hessian's Cholesky factor.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum FillOrdering {
     /// faer's approximate minimum degree on the coordinate graph.
     Amd,
@@ -264,8 +265,9 @@ pub struct RigSummary {
     pub factor_nnz: usize,
     /// Multiply-adds of one numeric factorization (from the symbolic structure).
     pub factor_flops: f64,
-    /// The fill-reducing ordering used: `"amd"` or `"nested dissection"`.
-    pub ordering: &'static str,
+    /// The fill-reducing ordering used: [`FillOrdering::Amd`] or
+    /// [`FillOrdering::NestedDissection`] (never `Cheapest`, which picks one of them).
+    pub ordering: FillOrdering,
     /// Predicted bytes of one solver workspace (the memory check).
     pub predicted_bytes: u64,
 }
