@@ -79,10 +79,11 @@ fn row(
         .map(|k| Weights::Alpha(k as f64 / (steps.max(2) - 1) as f64))
         .collect();
     let t1 = Instant::now();
-    let (mut iters, mut converged) = (0, true);
+    let (mut iters, mut factors, mut converged) = (0, 0, true);
     for r in v.solve_many(&w, threads) {
         let r = r?;
         iters += r.stats.newton_iterations;
+        factors += r.stats.factorizations;
         converged &= r.stats.converged;
     }
     let per_step = t1.elapsed().as_secs_f64() / steps as f64;
@@ -93,21 +94,24 @@ fn row(
     let rep = v.report();
     let n_total = rep.surface_vertices + rep.interior_vertices;
     let springs = v.physical().summary().springs + rep.internal_springs;
+    let gflop = v.physical().summary().factor_flops / 1e9;
     let order = match v.physical().summary().ordering {
         FillOrdering::Amd => "amd",
         _ => "metis",
     };
     println!(
-        "{:<14} {:>8} {:>6} {:>7} {:>7} {:>8} {:>9.0} {:>10.1} {:>7.2} {:>9} {:>9.2e}",
+        "{:<14} {:>8} {:>6} {:>6.2} {:>7} {:>7} {:>8} {:>9.0} {:>10.1} {:>7.2} {:>7.2} {:>9} {:>9.2e}",
         name,
         kind,
         order,
+        gflop,
         rep.surface_vertices,
         n_total,
         springs,
         setup * 1e3,
         per_step * 1e3,
         iters as f64 / steps as f64,
+        factors as f64 / steps as f64,
         converged,
         deviation
     );
@@ -115,7 +119,8 @@ fn row(
         "mesh": name, "interior": kind, "ordering": order,
         "surface_vertices": rep.surface_vertices, "total_vertices": n_total,
         "springs": springs, "tetrahedra": rep.tetrahedra,
-        "factor_nnz": v.physical().factor_nnz(),
+        "factor_nnz": v.physical().factor_nnz(), "factor_gflop": gflop,
+        "factorizations_per_step": factors as f64 / steps as f64,
         "setup_ms": setup * 1e3, "ms_per_step": per_step * 1e3,
         "newton_iterations_per_step": iters as f64 / steps as f64,
         "all_converged": converged, "threads": threads,
@@ -147,16 +152,18 @@ pub fn run_volume_bench(
     println!("physical blend with internal springs (BCC lattice, density 1; tetgen rows: tetgen, density 1{}), {steps} steps, {threads} thread(s); vol dev: |V - (V0 + V1)/2| / ((V0 + V1)/2) at alpha = 0.5",
         if have_tetgen { "" } else { ", skipped: no tetgen on the PATH" });
     println!(
-        "{:<14} {:>8} {:>6} {:>7} {:>7} {:>8} {:>9} {:>10} {:>7} {:>9} {:>9}",
+        "{:<14} {:>8} {:>6} {:>6} {:>7} {:>7} {:>8} {:>9} {:>10} {:>7} {:>7} {:>9} {:>9}",
         "mesh",
         "interior",
         "order",
+        "Gflop",
         "surface",
         "total",
         "springs",
         "setup ms",
         "ms/step",
         "newton",
+        "factor",
         "conv",
         "vol dev"
     );
