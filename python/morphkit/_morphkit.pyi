@@ -45,6 +45,7 @@ class PhysicalBlend:
         *,
         fixed: Union[None, str, Sequence[int]] = None,
         hinge_weight: Optional[float] = None,
+        tether: Optional[float] = None,
         kinematic_stretch: Optional[float] = None,
         gradient_tolerance: Optional[float] = None,
         max_newton_iterations: Optional[int] = None,

@@ -203,6 +203,8 @@ impl PyPhysicalBlend {
     ///
     /// `fixed`: `"auto"` (default: vertices that move in no shape), `"none"`, or vertex ids
     /// (interpolated linearly). `hinge_weight` (default 0.01, 0 turns the bending term off),
+    /// `tether` (default 1e-5: every solved vertex tied weakly to the predictor, so that parts
+    /// that can swing either way do not snap between frames; 0 turns it off),
     /// `kinematic_stretch` (default 10), `thin_band_rings` (default 4: long parts within 4
     /// edges of the boundary follow the predictor; 0 turns it off), `gradient_tolerance` (default 1e-6),
     /// `max_newton_iterations` (default 300), `sampled_start` (default True: frames start
@@ -216,7 +218,7 @@ impl PyPhysicalBlend {
     /// `morphkit blend --interior/--anchor`. `summary["interior"]` reports what was built.
     #[new]
     #[pyo3(signature = (base, targets, faces, *, fixed=None, hinge_weight=None,
-        kinematic_stretch=None, thin_band_rings=None, gradient_tolerance=None,
+        tether=None, kinematic_stretch=None, thin_band_rings=None, gradient_tolerance=None,
         max_newton_iterations=None, sampled_start=true, interior=None, anchor=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -226,6 +228,7 @@ impl PyPhysicalBlend {
         faces: &Bound<'_, PyAny>,
         fixed: Option<&Bound<'_, PyAny>>,
         hinge_weight: Option<f64>,
+        tether: Option<f64>,
         kinematic_stretch: Option<f64>,
         thin_band_rings: Option<usize>,
         gradient_tolerance: Option<f64>,
@@ -243,6 +246,9 @@ impl PyPhysicalBlend {
         };
         if let Some(w) = hinge_weight {
             opts.hinges.weight = w;
+        }
+        if let Some(t) = tether {
+            opts.tether = t;
         }
         if let Some(s) = kinematic_stretch {
             opts.kinematic_stretch = s;

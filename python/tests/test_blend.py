@@ -250,3 +250,18 @@ def test_thin_bands_follow_the_predictor():
     springs = morphkit.PhysicalBlend(V, [B], F, thin_band_rings=0)
     assert springs.summary["band_vertices"] == 0
     assert springs.solve(0.4).shape == V.shape
+
+
+def test_tether_is_weak_pulls_towards_the_predictor_and_is_checked(rig):
+    V, B, F = rig
+    d = diag(V)
+    frames = {t: morphkit.PhysicalBlend(V, [B], F, tether=t).solve(0.4) for t in (0.0, 1e-5, 1.0)}
+    p = morphkit.PhysicalBlend(V, [B], F).predict(0.4)
+    far = {t: np.linalg.norm(x - p, axis=1).max() for t, x in frames.items()}
+    # The default is weak (it moves the frame by a small part of the diagonal, and less than
+    # the equilibrium's distance from the predictor); a stiff tether pulls towards the predictor.
+    moved = np.abs(frames[1e-5] - frames[0.0]).max()
+    assert moved <= 1e-3 * d and moved <= 0.1 * far[0.0], (moved, far)
+    assert far[1.0] < 0.5 * far[1e-5] and far[0.0] > 1e-4 * d, far
+    with pytest.raises(morphkit.BlendError, match="tether"):
+        morphkit.PhysicalBlend(V, [B], F, tether=-1.0)

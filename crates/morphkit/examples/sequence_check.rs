@@ -9,7 +9,7 @@
 //!     --example sequence_check -- [horse|ict|all] [STEPS] [NAME-FILTER]
 //! ```
 //!
-//! `HINGE=c` sets the hinge weight, `MARGIN=m` its fold margin (radians), `BANDS=r` the
+//! `PROFILE=1` prints every consecutive pair's step ratio. `HINGE=c` sets the hinge weight, `TETHER=μ` the predictor tether, `MARGIN=m` its fold margin (radians), `BANDS=r` the
 //! thin-band rings, `NO_SAMPLED=1` starts from the plain predictor, and `DUMP=DIR` writes
 //! every frame's physical, predicted and linear positions as raw little-endian f64 (`#V × 3`)
 //! to `DIR/NAME-{phys,pred,lin}-KK.f64` for pictures.
@@ -22,7 +22,8 @@ use morphkit::io::read_shape_set;
 use morphkit::mesh::Point;
 use morphkit::mesh::Topology;
 use morphkit::springs::{
-    blend_metrics, fold_metrics, linear_blend, BlendOptions, BlendResult, PhysicalBlend,
+    blend_metrics, fold_metrics, linear_blend, BlendOptions, BlendResult, ContinuityCheck,
+    PhysicalBlend,
 };
 
 fn env<T: std::str::FromStr>(name: &str) -> Option<T> {
@@ -36,6 +37,9 @@ fn options() -> BlendOptions {
     };
     if let Some(h) = env("HINGE") {
         o.hinges.weight = h;
+    }
+    if let Some(t) = env("TETHER") {
+        o.tether = t;
     }
     if let Some(r) = env("BANDS") {
         o.thin_band_rings = r;
@@ -115,6 +119,21 @@ fn run(
     dump(name, solver, targets, target, &rep.frames);
     for f in &rep.failures {
         println!("  {f}");
+    }
+    if std::env::var("PROFILE").is_ok() {
+        // Every consecutive pair's step ratio (a bound of 0 lists them all).
+        let s = solver.shapes();
+        let mut all = ContinuityCheck::new(0.0, morphkit::mesh::bbox_diagonal(s.positions(0)));
+        for (w, r) in ramp(targets, target, steps).iter().zip(&rep.frames) {
+            all.push(&r.positions, &linear_blend(s, w).unwrap())
+                .unwrap();
+        }
+        for j in all.finish().jumps {
+            println!(
+                "  frames {:?}: {:.2}× (vertex {})",
+                j.frames, j.ratio, j.vertex
+            );
+        }
     }
     println!(
         "{name}: {} — worst step {:.2}× linear, folds over linear {}, from linear {:.3}, {} Newton, {secs:.1} s",

@@ -408,3 +408,64 @@ fn a_component_held_only_by_kinematic_vertices_is_aligned_as_a_whole() {
         Err(BlendError::TargetOnFreeComponent { .. })
     ));
 }
+
+/// The predictor tether ([`BlendOptions::tether`]) is weak at its default: it moves a 150°
+/// bend by a small fraction of what separates the equilibrium from the predictor. Stiffer, it
+/// pulls the equilibrium monotonically towards the predictor, and at any stiffness the
+/// endpoints stay exact (the predictor is the shape there). Negative or non-finite values are
+/// refused.
+#[test]
+fn the_tether_is_weak_and_pulls_towards_the_predictor() {
+    let s = bent_bar(150.0);
+    let d = bbox_diagonal(s.positions(0));
+    let w = Weights::Alpha(0.4);
+    let solve = |tether: f64, w: &Weights| {
+        let o = BlendOptions {
+            tether,
+            ..Default::default()
+        };
+        let r = PhysicalBlend::new(&s, &o).unwrap().solve(w).unwrap();
+        assert!(r.stats.converged, "tether {tether}: {:?}", r.stats);
+        r
+    };
+    let p = PhysicalBlend::new(&s, &BlendOptions::default())
+        .unwrap()
+        .predict(&w)
+        .unwrap();
+    let free = solve(0.0, &w).positions;
+    let default = solve(BlendOptions::default().tether, &w).positions;
+    let stiff = solve(1.0, &w).positions;
+    let (f, t, st) = (
+        max_dist(&free, &p),
+        max_dist(&default, &p),
+        max_dist(&stiff, &p),
+    );
+    assert!(
+        f > 1e-3 * d,
+        "the bend's equilibrium is not the predictor: {f}"
+    );
+    assert!(
+        max_dist(&default, &free) <= 0.02 * f,
+        "default tether moved the frame by {} of {f}",
+        max_dist(&default, &free)
+    );
+    assert!(t <= f && st < 0.5 * t, "towards P: {f} ≥ {t} > 2 × {st}");
+    for (a, shape) in [(0.0, 0), (1.0, 1)] {
+        let r = solve(1.0, &Weights::Alpha(a));
+        assert_eq!(r.stats.newton_iterations, 0, "alpha {a}");
+        assert!(max_dist(&r.positions, s.positions(shape)) <= 1e-12 * d);
+    }
+    for bad in [-1e-5, f64::NAN, f64::INFINITY] {
+        let o = BlendOptions {
+            tether: bad,
+            ..Default::default()
+        };
+        assert!(
+            matches!(
+                PhysicalBlend::new(&s, &o),
+                Err(BlendError::InvalidOption(_))
+            ),
+            "tether {bad} accepted"
+        );
+    }
+}

@@ -100,6 +100,11 @@ pub struct BlendArgs {
     /// Weight of the signed-hinge bending term relative to the springs (0 turns it off).
     #[arg(long, default_value_t = 0.01)]
     pub hinge_weight: f64,
+    /// Stiffness, relative to the mean spring, of the zero-length springs that tie every
+    /// solved vertex to the rotation-aware predictor; they keep parts that can swing either
+    /// way from snapping between frames (0 turns them off).
+    #[arg(long, default_value_t = 1e-5)]
+    pub tether: f64,
     /// Triangles stretched more than this factor between the base and a target follow the
     /// linear blend (kinematic); `inf` turns this off.
     #[arg(long, default_value_t = 10.0)]
@@ -386,6 +391,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         fixed: read_fixed(&a.fixed)?,
         gradient_tolerance: a.tolerance,
         kinematic_stretch: a.kinematic_stretch,
+        tether: a.tether,
         thin_band_rings: a.thin_band_rings,
         refactor_every: a.refactor_every,
         keep_factor_cg: a.keep_factor_cg,

@@ -47,6 +47,7 @@ pub(crate) struct BlendSpec {
     pub k0: Option<f64>,
     pub bending: Option<bool>,
     pub hinge_weight: Option<f64>,
+    pub tether: Option<f64>,
     pub kinematic_stretch: Option<f64>,
     pub thin_band_rings: Option<usize>,
     pub tolerance: Option<f64>,

@@ -16,7 +16,7 @@
 //! # interior = "lattice"                 # internal springs: "none", "lattice" or "tetgen",
 //! #                                      #   optionally ",density" (as `blend --interior`)
 //! # anchor = "auto"                      # the rigid anchor: "auto" or "x,y,z[,size]"
-//! # k0, bending, hinge_weight, kinematic_stretch, thin_band_rings, tolerance,
+//! # k0, bending, hinge_weight, tether, kinematic_stretch, thin_band_rings, tolerance,
 //! # max_newton_iterations
 //!
 //! [collision]
@@ -359,6 +359,9 @@ fn blend_options(ctx: &Ctx, f: &SceneFile) -> Result<BlendOptions, SceneError> {
     }
     if let Some(h) = b.hinge_weight {
         o.hinges.weight = h;
+    }
+    if let Some(t) = b.tether {
+        o.tether = t;
     }
     if let Some(k) = b.kinematic_stretch {
         o.kinematic_stretch = k;

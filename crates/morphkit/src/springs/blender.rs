@@ -503,7 +503,10 @@ impl Rig {
         let lin = predictor::linear(&self.shapes, c);
         // One Poisson solve per frame: a given start needs the prediction only for the bands.
         let rotated = match from {
-            Start::From(_) if self.constraints.bands.is_empty() => None,
+            // The tether pulls towards P, so it needs the prediction whatever the start.
+            Start::From(_) if self.constraints.bands.is_empty() && self.options.tether == 0.0 => {
+                None
+            }
             _ => self.rotation_prediction(c, &lin),
         };
         let corrected;
@@ -526,7 +529,16 @@ impl Rig {
         let n = self.shapes.num_vertices();
         let dof = &self.system.dof_index;
         let held = Held::new(n, targets, |v| (0..3).all(|a| dof[3 * v + a] != u32::MAX));
-        let soft: Vec<PointTarget> = targets.iter().filter(|t| !t.is_hard()).copied().collect();
+        let mut soft: Vec<PointTarget> = targets.iter().filter(|t| !t.is_hard()).copied().collect();
+        if self.options.tether > 0.0 {
+            let predicted = self.start(&lin, rotated.as_deref(), None);
+            let free = |v: usize| (0..3).all(|a| dof[3 * v + a] != u32::MAX);
+            soft.extend(super::tether::targets(
+                &predicted,
+                free,
+                self.options.tether,
+            ));
+        }
         let points = PointTerm {
             targets: &soft,
             scale: self.mean_stiffness,

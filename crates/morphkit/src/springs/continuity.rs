@@ -26,7 +26,8 @@ use crate::mesh::{norm, sub, Point};
 /// travels at most θ / (2 sin θ/2) ≤ π/2 times its chord, and the equilibrium may move up to
 /// twice as fast in the weights as uniformly (rest lengths are linear in the weights,
 /// positions are not): 2 · π/2 ≈ 3.1 < 4. A snap to another equilibrium moves a part by many
-/// steps at once (5.8–8.8× on three horse legs, 25× on the ICT jawOpen gums, 36 steps).
+/// steps at once (5.8–8.8× on three horse legs, 25× on the ICT jawOpen gums, 36 steps, before
+/// the [predictor tether](super::tether) joined those equilibria).
 pub const JUMP_BOUND: f64 = 4.0;
 
 /// Two consecutive frames between which a part moved more than [`JUMP_BOUND`] allows.

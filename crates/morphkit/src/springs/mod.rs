@@ -37,7 +37,10 @@
 //! > each gauged component aligned rigidly to the linear blend. The *sampled correction*
 //! > $q_s$ ([`sampled_start`], [`BlendOptions::sampled_start`]) interpolates how far target
 //! > $s$'s own equilibria at $a = ¼, ½, ¾$ lie from $P$ (solved once per rig, ½ from $P$, ¼ and
-//! > ¾ from $P$ plus the ½ sample's correction); it is zero at $c_s \in \{0, 1\}$.
+//! > ¾ from $P$ plus the ½ sample's correction); it is zero at $c_s \in \{0, 1\}$. The
+//! > energy includes a weak [`tether`] of every solved vertex to $P(w)$
+//! > ([`BlendOptions::tether`]), which lifts the soft modes where the blended lengths have two
+//! > equilibria, so that consecutive frames follow one branch instead of snapping.
 //!
 //! Consequences, each tested:
 //! - **Endpoints are exact.** At one-hot weights $P = x^s$, where every term has zero energy and
@@ -89,6 +92,7 @@ mod spring_set;
 mod steihaug;
 mod system;
 pub mod terms;
+pub mod tether;
 pub mod weights;
 
 pub(crate) use blender::report_lost;
