@@ -528,11 +528,11 @@ impl Rig {
         }
         let n = self.shapes.num_vertices();
         let dof = &self.system.dof_index;
-        let held = Held::new(n, targets, |v| (0..3).all(|a| dof[3 * v + a] != u32::MAX));
+        let free = |v: usize| (0..3).all(|a| dof[3 * v + a] != u32::MAX);
+        let held = Held::new(n, targets, free);
         let mut soft: Vec<PointTarget> = targets.iter().filter(|t| !t.is_hard()).copied().collect();
         if self.options.tether > 0.0 {
             let predicted = self.start(&lin, rotated.as_deref(), None);
-            let free = |v: usize| (0..3).all(|a| dof[3 * v + a] != u32::MAX);
             soft.extend(super::tether::targets(
                 &predicted,
                 free,

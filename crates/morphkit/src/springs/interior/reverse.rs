@@ -114,6 +114,8 @@ pub fn solve(
         },
         fixed: FixedVertices::Ids((0..n as u32).collect()),
         kinematic_stretch: f64::INFINITY,
+        // The equilibrium of the extra springs alone: no pull towards the starting guess.
+        tether: 0.0,
         ..options.clone()
     };
     let term: Box<dyn EnergyTerm> = Box::new(SpringTerm::new(set, o.min_rest_fraction));
