@@ -9,7 +9,8 @@
 //!     --example sequence_check -- [horse|ict|all] [STEPS] [NAME-FILTER]
 //! ```
 //!
-//! `PROFILE=1` prints every consecutive pair's step ratio. `HINGE=c` sets the hinge weight, `TETHER=μ` the predictor tether, `MARGIN=m` its fold margin (radians), `BANDS=r` the
+//! `PROFILE=1` prints every consecutive pair's step ratio. `HINGE=c` sets the hinge weight,
+//! `TETHER=μ` the predictor tether, `MARGIN=m` its fold margin (radians), `BANDS=r` the
 //! thin-band rings, `NO_SAMPLED=1` starts from the plain predictor, and `DUMP=DIR` writes
 //! every frame's physical, predicted and linear positions as raw little-endian f64 (`#V × 3`)
 //! to `DIR/NAME-{phys,pred,lin}-KK.f64` for pictures.

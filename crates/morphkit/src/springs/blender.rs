@@ -531,13 +531,11 @@ impl Rig {
         let free = |v: usize| (0..3).all(|a| dof[3 * v + a] != u32::MAX);
         let held = Held::new(n, targets, free);
         let mut soft: Vec<PointTarget> = targets.iter().filter(|t| !t.is_hard()).copied().collect();
-        if self.options.tether > 0.0 {
-            let predicted = self.start(&lin, rotated.as_deref(), None);
-            soft.extend(super::tether::targets(
-                &predicted,
-                free,
-                self.options.tether,
-            ));
+        // P(w) in solver coordinates: the tether's targets, and the start when none is given.
+        let predicted = (self.options.tether > 0.0 || start_from.is_none())
+            .then(|| self.start(&lin, rotated.as_deref(), None));
+        if let Some(p) = predicted.as_deref().filter(|_| self.options.tether > 0.0) {
+            soft.extend(super::tether::targets(p, free, self.options.tether));
         }
         let points = PointTerm {
             targets: &soft,
@@ -549,7 +547,10 @@ impl Rig {
             terms.push(&points);
             params.push(TermParameters::default());
         }
-        let mut x = self.start(&lin, rotated.as_deref(), start_from);
+        let mut x = match (start_from, predicted) {
+            (None, Some(p)) => p,
+            _ => self.start(&lin, rotated.as_deref(), start_from),
+        };
         let mut stats = FrameStats {
             gradient_tolerance: self.tolerance,
             clamped_springs: params.iter().map(|p| p.clamped).sum(),
