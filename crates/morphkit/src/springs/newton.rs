@@ -255,11 +255,6 @@ pub(crate) fn trust_region(
             exact_current = true;
         }
         sys.gather(&g, &mut gfree);
-        if radius.is_nan() {
-            let mut mg = gfree.clone();
-            ws.factor().solve_one(&mut mg)?;
-            radius = 2.0 * dot(&gfree, &mg).max(0.0).sqrt();
-        }
         let stop = StopRule {
             rtol: (0.1 * gmax / g0max).clamp(1e-6, 0.1),
             atol_max: 0.1 * prob.tolerance,
@@ -273,7 +268,7 @@ pub(crate) fn trust_region(
             &mut op,
             &mut pre,
             &gfree,
-            radius,
+            &mut radius, // NaN at first: set from the first preconditioned gradient
             &stop,
             &mut stats.cg_iterations,
         );

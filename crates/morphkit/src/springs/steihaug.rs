@@ -66,11 +66,16 @@ fn to_boundary(zz: f64, zd: f64, dd: f64, radius: f64) -> f64 {
 /// `g` is the gradient restricted to free coordinates; `op(p, out)` writes $H p$ and
 /// `precond(r)` overwrites `r` with $M^{-1} r$. Returns `None` when the preconditioner fails
 /// (no valid factorization) or the operator gives non-finite values.
+///
+/// A NaN `radius` asks for the initial one, $\Delta_0 = 2 \sqrt{g^\top M^{-1} g}$ (twice
+/// the $M$-norm of the preconditioned Newton step), written back to `radius`: it comes from
+/// the first preconditioner application, which the iteration needs anyway, so it costs no
+/// extra solve.
 pub(crate) fn steihaug(
     op: &mut dyn FnMut(&[f64], &mut [f64]),
     precond: &mut dyn FnMut(&mut [f64]) -> bool,
     g: &[f64],
-    radius: f64,
+    radius: &mut f64,
     stop: &StopRule,
     iterations: &mut usize,
 ) -> Option<TruncatedStep> {
@@ -98,6 +103,10 @@ pub(crate) fn steihaug(
     }
     let mut d: Vec<f64> = y.iter().map(|v| -v).collect();
     let mut ry = dot(&r, &y);
+    if radius.is_nan() {
+        *radius = 2.0 * ry.max(0.0).sqrt();
+    }
+    let radius = *radius;
     // M-inner products of the iterate and the direction, by recurrence.
     let (mut zz, mut zd, mut dd) = (0.0, 0.0, ry);
     let mut hd = vec![0.0; n];
@@ -145,4 +154,61 @@ pub(crate) fn steihaug(
         dd = ry + beta * beta * dd;
     }
     Some(done(z, &hz, zz, Termination::Budget, rel))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 3 × 3 SPD operator and a diagonal preconditioner.
+    fn problem() -> ([[f64; 3]; 3], [f64; 3], [f64; 3]) {
+        let h = [[4.0, 1.0, 0.0], [1.0, 3.0, 0.5], [0.0, 0.5, 2.0]];
+        (h, [2.0, 3.0, 1.5], [1.0, -2.0, 0.5])
+    }
+
+    fn run(radius: &mut f64, max_iter: usize) -> TruncatedStep {
+        let (h, m, g) = problem();
+        let mut op = |p: &[f64], out: &mut [f64]| {
+            for r in 0..3 {
+                out[r] = (0..3).map(|c| h[r][c] * p[c]).sum();
+            }
+        };
+        let mut pre = |r: &mut [f64]| {
+            r.iter_mut().zip(m).for_each(|(v, d)| *v /= d);
+            true
+        };
+        let stop = StopRule {
+            rtol: 1e-12,
+            atol_max: 0.0,
+            max_iter,
+        };
+        let mut its = 0;
+        steihaug(&mut op, &mut pre, &g, radius, &stop, &mut its).expect("valid operator")
+    }
+
+    #[test]
+    fn a_nan_radius_becomes_twice_the_preconditioned_newton_norm_at_no_extra_cost() {
+        let (_, m, g) = problem();
+        let expected = 2.0 * g.iter().zip(m).map(|(v, d)| v * v / d).sum::<f64>().sqrt();
+        let mut radius = f64::NAN;
+        let first = run(&mut radius, 40);
+        assert_eq!(radius, expected);
+        // The same step as with that radius given explicitly.
+        let mut given = expected;
+        let second = run(&mut given, 40);
+        assert_eq!(first.step, second.step);
+        assert_eq!(given, expected, "a given radius is left as it is");
+        // Δ₀ is wide enough here: plain CG converges to H p = -g inside it.
+        assert_eq!(first.termination, Termination::Converged);
+        let (h, _, g) = problem();
+        for r in 0..3 {
+            let res: f64 = (0..3).map(|c| h[r][c] * first.step[c]).sum::<f64>() + g[r];
+            assert!(res.abs() < 1e-10, "row {r}: residual {res}");
+        }
+        // A small radius cuts the step at the boundary, at that M-norm.
+        let mut small = 0.1;
+        let cut = run(&mut small, 40);
+        assert_eq!(cut.termination, Termination::Boundary);
+        assert!((cut.m_norm - 0.1).abs() < 1e-12, "{}", cut.m_norm);
+    }
 }
