@@ -166,7 +166,7 @@ mod tests {
         (h, [2.0, 3.0, 1.5], [1.0, -2.0, 0.5])
     }
 
-    fn run(radius: &mut f64, max_iter: usize) -> TruncatedStep {
+    fn run(radius: &mut f64) -> TruncatedStep {
         let (h, m, g) = problem();
         let mut op = |p: &[f64], out: &mut [f64]| {
             for r in 0..3 {
@@ -180,7 +180,7 @@ mod tests {
         let stop = StopRule {
             rtol: 1e-12,
             atol_max: 0.0,
-            max_iter,
+            max_iter: 40,
         };
         let mut its = 0;
         steihaug(&mut op, &mut pre, &g, radius, &stop, &mut its).expect("valid operator")
@@ -191,13 +191,16 @@ mod tests {
         let (_, m, g) = problem();
         let expected = 2.0 * g.iter().zip(m).map(|(v, d)| v * v / d).sum::<f64>().sqrt();
         let mut radius = f64::NAN;
-        let first = run(&mut radius, 40);
-        assert_eq!(radius, expected);
-        // The same step as with that radius given explicitly.
-        let mut given = expected;
-        let second = run(&mut given, 40);
+        let first = run(&mut radius);
+        assert!(
+            (radius - expected).abs() <= 1e-14 * expected,
+            "{radius} vs {expected}"
+        );
+        // The same step as with that radius given explicitly, which is left as it is.
+        let mut given = radius;
+        let second = run(&mut given);
         assert_eq!(first.step, second.step);
-        assert_eq!(given, expected, "a given radius is left as it is");
+        assert_eq!(given, radius);
         // Δ₀ is wide enough here: plain CG converges to H p = -g inside it.
         assert_eq!(first.termination, Termination::Converged);
         let (h, _, g) = problem();
@@ -207,7 +210,7 @@ mod tests {
         }
         // A small radius cuts the step at the boundary, at that M-norm.
         let mut small = 0.1;
-        let cut = run(&mut small, 40);
+        let cut = run(&mut small);
         assert_eq!(cut.termination, Termination::Boundary);
         assert!((cut.m_norm - 0.1).abs() < 1e-12, "{}", cut.m_norm);
     }
