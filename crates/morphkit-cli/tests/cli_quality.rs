@@ -134,6 +134,25 @@ fn reports_carry_quality_and_cycle_consistency() {
         c["max_relative"].as_f64().unwrap(),
     );
     assert!(lmean > 0.0 && lmean <= lmax && lmax < 0.1, "{c}");
+    // The fold guard reports, per frame, the triangles it left unturned.
+    let guarded = json(&local)["fold_guard_unturned_triangles_per_frame"].clone();
+    assert_eq!(guarded.as_array().map(Vec::len), Some(2), "{guarded}");
+    // --no-fold-guard only goes with --local-stretch.
+    let e = fails(&[
+        "transfer",
+        "--source-ref",
+        s(&src),
+        "--source",
+        s(&d.join("frame-0.obj")),
+        "--target",
+        s(&tgt),
+        "--markers",
+        s(&markers),
+        "--out",
+        s(&d.join("out3")),
+        "--no-fold-guard",
+    ]);
+    assert!(e.contains("--local-stretch"), "{e}");
     let e = fails(&[
         "transfer",
         "--source-ref",

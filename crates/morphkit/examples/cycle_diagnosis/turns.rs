@@ -283,11 +283,18 @@ pub fn cycle_turn(
     let mut ys = Vec::new();
     for f in &p.frames {
         let gs = tf.source_gradients(f).unwrap();
-        let g = match turn {
-            None => tf.target_gradients(&gs),
-            Some(t) => df.map(&gs, t, &sf),
+        let (y, g) = match turn {
+            // The library, fold guard included.
+            None => {
+                let (y, g, _) = tf.transfer_gradients(&gs, Some(f)).unwrap();
+                (y, g)
+            }
+            // The variants, unguarded.
+            Some(t) => {
+                let g = df.map(&gs, t, &sf);
+                (tf.solve_gradients(&g, Some(f)).unwrap(), g)
+            }
         };
-        let y = tf.solve_gradients(&g, Some(f)).unwrap();
         let nf = morphkit::transfer::sharp_folds(&p.b, &topo_b, &y);
         if std::env::var("PER_FRAME").is_ok() {
             eprint!("{nf} ");
@@ -295,11 +302,10 @@ pub fn cycle_turn(
         m.folds += nf;
         m.flipped += tf.flipped_triangles(&y, &g).len();
         let gb = tb.source_gradients(&y).unwrap();
-        let g2 = match turn {
-            None => tb.target_gradients(&gb),
-            Some(t) => db.map(&gb, t, &sb),
+        let z = match turn {
+            None => tb.transfer_gradients(&gb, Some(&y)).unwrap().0,
+            Some(t) => tb.solve_gradients(&db.map(&gb, t, &sb), Some(&y)).unwrap(),
         };
-        let z = tb.solve_gradients(&g2, Some(&y)).unwrap();
         let e = errs(&z, f, d);
         m.mean += mean(&e);
         m.max = e.iter().copied().fold(m.max, f64::max);

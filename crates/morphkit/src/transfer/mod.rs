@@ -13,6 +13,7 @@
 pub mod animation;
 pub mod correspondence;
 pub mod error;
+pub mod fold_guard;
 pub mod gradients;
 pub mod kdtree;
 pub mod laplacian;
@@ -33,13 +34,14 @@ pub use correspondence::{
     GradientCombine, MarkerResidual, RefineOptions, RefineStep, CONFIDENCE_FLOOR,
 };
 pub use error::{CorrespondenceError, MarkerError, Side, TransferError};
+pub use fold_guard::{FoldGuard, GuardOutcome, GuardedFrame};
 pub use gradients::{deformation_gradients, flipped_triangles, GradientOperator};
 pub use laplacian::{mean_value_laplacian, LaplacianOptions, MeanValueLaplacian};
 pub use lsmesh::{least_squares_mesh, LeastSquaresMesh, LsMeshOptions, OMEGA};
 pub use markers::{Markers, MIN_MARKERS};
 pub use quality::{
-    correspondence_quality, cycle_consistency, fold_count, match_confidence, sharp_folds,
-    CorrespondenceQuality, CycleConsistency, FoldCount, LOW_CONFIDENCE,
+    correspondence_quality, cycle_consistency, fold_count, match_confidence, sharp_fold_edges,
+    sharp_folds, CorrespondenceQuality, CycleConsistency, FoldCount, LOW_CONFIDENCE,
 };
 pub use rig::{transfer_rig, RigOptions, RigTransfer, TransferredShape};
 pub use solve::{SolverOptions, TransferSolver, TriangleWeighting};

@@ -56,6 +56,12 @@ pub struct FoldCount {
 
 /// Counts sharp folds of `frame` over `reference`'s connectivity (edges with two triangles).
 pub fn sharp_folds(reference: &TriMesh, topology: &Topology, frame: &[Point]) -> usize {
+    sharp_fold_edges(reference, topology, frame).len()
+}
+
+/// The sharply folded edges of `frame` (indices into `topology.edges()`, ascending): interior
+/// edges whose triangles' normals are more than 120° apart in `frame` but not in `reference`.
+pub fn sharp_fold_edges(reference: &TriMesh, topology: &Topology, frame: &[Point]) -> Vec<usize> {
     let tris = &reference.triangles;
     let sharp = |p: &[Point], a: u32, b: u32| {
         let na = triangle_normal(p, tris[a as usize]);
@@ -68,7 +74,7 @@ pub fn sharp_folds(reference: &TriMesh, topology: &Topology, frame: &[Point]) ->
             let f = topology.edge_faces(e);
             f.len() == 2 && sharp(frame, f[0], f[1]) && !sharp(&reference.positions, f[0], f[1])
         })
-        .count()
+        .collect()
 }
 
 /// Fold counts of a frame `x` transferred by `tr` with wanted gradients `wanted`.
@@ -165,8 +171,7 @@ pub fn cycle_consistency(
         forward_sharp_folds: Vec::with_capacity(frames.len()),
     };
     for (i, f) in frames.iter().enumerate() {
-        let g = fwd.target_gradients(&fwd.source_gradients_at(i, f)?);
-        let y = fwd.solve_gradients(&g, Some(f))?;
+        let (y, g, _) = fwd.transfer_gradients(&fwd.source_gradients_at(i, f)?, Some(f))?;
         let folds = fold_count(&fwd, b, &topo_b, &y, &g);
         out.forward_flipped.push(folds.flipped);
         out.forward_sharp_folds.push(folds.sharp_folds);

@@ -235,10 +235,9 @@ impl RigTransfer {
             self.source_center,
             self.target_center,
         );
-        let g = self
+        let (mut x, g, _) = self
             .transfer
-            .target_gradients(&self.transfer.source_gradients_at(index, &aligned)?);
-        let mut x = self.transfer.solve_gradients(&g, None)?;
+            .transfer_gradients(&self.transfer.source_gradients_at(index, &aligned)?, None)?;
         let shifts: Vec<Vector3<f64>> = self
             .component_anchors
             .iter()

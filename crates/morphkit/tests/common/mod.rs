@@ -148,6 +148,32 @@ pub fn horse_camel() -> Option<Pair> {
     })
 }
 
+/// Horse gallop → camel (an animation the issue-9 settings were not chosen on): all 48
+/// gallop frames, divided by their 1.6768815 scale (the gallop's SOURCE.md) to the
+/// horse-camel reference's, with the horse ↔ camel markers.
+pub fn gallop_camel() -> Option<Pair> {
+    let mut p = horse_camel()?;
+    let dir = data_dir().unwrap().join("sumner-horse-gallop");
+    p.name = "gallop→camel";
+    p.frames = (1..=48)
+        .map(|i| {
+            let path = dir.join(format!("horse-gallop-{i:02}.obj.gz"));
+            assert!(
+                path.is_file(),
+                "MORPHKIT_DATA is set but {} is missing",
+                path.display()
+            );
+            let m = morphkit::io::read_mesh(&path).unwrap();
+            assert_eq!(m.triangles, p.a_ref.triangles, "{}", path.display());
+            m.positions
+                .iter()
+                .map(|q| q.map(|x| x / 1.6768815))
+                .collect()
+        })
+        .collect();
+    Some(p)
+}
+
 /// Cat → dog with the 36 frames of the cat's run; `None` when `MORPHKIT_DATA` is unset. The
 /// run frames are at 0.1× the reference scale: frame 0 is the gradients' reference.
 pub fn cat_dog() -> Option<Pair> {

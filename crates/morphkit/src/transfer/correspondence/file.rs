@@ -165,6 +165,30 @@ impl Correspondence {
         target_normals: &[Vector3<f64>],
         combine: GradientCombine,
     ) -> Vec<Matrix3<f64>> {
+        self.map_local(source_polar, source_normals, target_normals, combine, true)
+    }
+
+    /// [`Correspondence::map_gradients_local`] with every $Q_{kj} = I$ (the same weights, the
+    /// stretches not turned): the fallback of the fold guard
+    /// ([`FoldGuard`](crate::transfer::FoldGuard)).
+    pub fn map_gradients_local_unturned(
+        &self,
+        source_polar: &[(Matrix3<f64>, Matrix3<f64>)],
+        source_normals: &[Vector3<f64>],
+        target_normals: &[Vector3<f64>],
+        combine: GradientCombine,
+    ) -> Vec<Matrix3<f64>> {
+        self.map_local(source_polar, source_normals, target_normals, combine, false)
+    }
+
+    fn map_local(
+        &self,
+        source_polar: &[(Matrix3<f64>, Matrix3<f64>)],
+        source_normals: &[Vector3<f64>],
+        target_normals: &[Vector3<f64>],
+        combine: GradientCombine,
+        turn: bool,
+    ) -> Vec<Matrix3<f64>> {
         (0..self.target_triangles)
             .map(|t| {
                 let nt = target_normals[t];
@@ -180,9 +204,13 @@ impl Correspondence {
                         return;
                     }
                     let (ri, si) = &source_polar[i];
-                    let q = rotation_between(source_normals[i], nt);
                     r += ri * w;
-                    s += q * si * q.transpose() * w;
+                    if turn {
+                        let q = rotation_between(source_normals[i], nt);
+                        s += q * si * q.transpose() * w;
+                    } else {
+                        s += si * w;
+                    }
                     wsum += w;
                 });
                 polar(&r).0 * (s / wsum)
