@@ -151,6 +151,28 @@ mod tests {
     use super::*;
     use crate::transfer::testmesh::grid;
 
+    fn centroid_x(m: &TriMesh, t: usize) -> f64 {
+        m.triangles[t]
+            .iter()
+            .map(|&v| m.positions[v as usize][0])
+            .sum::<f64>()
+            / 3.0
+    }
+
+    /// Identity gradients left of `x = at`, a mirror in x to its right.
+    fn half_mirrored(m: &TriMesh, at: f64) -> Vec<Matrix3<f64>> {
+        let mirror = Matrix3::from_diagonal(&nalgebra::Vector3::new(-1.0, 1.0, 1.0));
+        (0..m.num_triangles())
+            .map(|t| {
+                if centroid_x(m, t) > at {
+                    mirror
+                } else {
+                    Matrix3::identity()
+                }
+            })
+            .collect()
+    }
+
     /// A grid whose wanted gradients fold it along a line: the guard's fallback (the identity)
     /// removes the fold, and only triangles near it are marked.
     #[test]
@@ -160,21 +182,7 @@ mod tests {
         let solver =
             crate::transfer::TransferSolver::new(&m, &Default::default()).expect("grid solves");
         // Triangles right of x = 6 want to be mirrored (a fold of 180° along the line).
-        let mirror = Matrix3::from_diagonal(&nalgebra::Vector3::new(-1.0, 1.0, 1.0));
-        let wanted: Vec<Matrix3<f64>> = (0..m.num_triangles())
-            .map(|t| {
-                let cx = m.triangles[t]
-                    .iter()
-                    .map(|&v| m.positions[v as usize][0])
-                    .sum::<f64>()
-                    / 3.0;
-                if cx > 6.0 {
-                    mirror
-                } else {
-                    Matrix3::identity()
-                }
-            })
-            .collect();
+        let wanted = half_mirrored(&m, 6.0);
         let plain = solver.solve(&wanted).unwrap();
         assert!(!sharp_fold_edges(&m, &topo, &plain).is_empty());
         let (x, used, outcome) = guarded_solve(
@@ -190,12 +198,7 @@ mod tests {
         assert!(outcome.unturned_triangles > 0 && outcome.extra_solves >= 2);
         // Far from the line (x < 2) nothing is marked.
         for t in 0..m.num_triangles() {
-            let cx = m.triangles[t]
-                .iter()
-                .map(|&v| m.positions[v as usize][0])
-                .sum::<f64>()
-                / 3.0;
-            if cx < 2.0 {
+            if centroid_x(&m, t) < 2.0 {
                 assert_eq!(used[t], wanted[t], "triangle {t} far from the fold");
             }
         }
@@ -222,21 +225,7 @@ mod tests {
         let topo = Topology::new(m.num_vertices(), &m.triangles);
         let solver =
             crate::transfer::TransferSolver::new(&m, &Default::default()).expect("grid solves");
-        let mirror = Matrix3::from_diagonal(&nalgebra::Vector3::new(-1.0, 1.0, 1.0));
-        let wanted: Vec<Matrix3<f64>> = (0..m.num_triangles())
-            .map(|t| {
-                let cx = m.triangles[t]
-                    .iter()
-                    .map(|&v| m.positions[v as usize][0])
-                    .sum::<f64>()
-                    / 3.0;
-                if cx > 4.0 {
-                    mirror
-                } else {
-                    Matrix3::identity()
-                }
-            })
-            .collect();
+        let wanted = half_mirrored(&m, 4.0);
         let plain = solver.solve(&wanted).unwrap();
         assert!(!sharp_fold_edges(&m, &topo, &plain).is_empty());
         let (x, used, outcome) = guarded_solve(
