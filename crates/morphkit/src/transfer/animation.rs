@@ -327,14 +327,18 @@ impl AnimationTransfer {
         source_gradients: &[Matrix3<f64>],
         source_frame: Option<&[Point]>,
     ) -> Result<GuardedFrame, TransferError> {
-        let wanted = self.target_gradients(source_gradients);
         let (Some((guard, target, topology)), Some((ns, nt))) = (&self.guard, &self.local_frames)
         else {
+            let wanted = self.target_gradients(source_gradients);
             let x = self.solve_gradients(&wanted, source_frame)?;
             return Ok((x, wanted, GuardOutcome::default()));
         };
+        // The polar factors serve the turned gradients and, on a fold, the unturned ones.
+        let pol: Vec<_> = source_gradients.iter().map(polar).collect();
+        let wanted = self
+            .correspondence
+            .map_gradients_local(&pol, ns, nt, self.combine);
         let unturned = || {
-            let pol: Vec<_> = source_gradients.iter().map(polar).collect();
             self.correspondence
                 .map_gradients_local_unturned(&pol, ns, nt, self.combine)
         };
