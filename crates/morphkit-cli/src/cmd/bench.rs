@@ -9,7 +9,8 @@
 use crate::outputs::{Kind, Plan};
 use morphkit::mesh::{generate, ShapeSet};
 use morphkit::springs::{
-    linear_blend, BlendOptions, ContinuityCheck, FillOrdering, PhysicalBlend, Weights, JUMP_BOUND,
+    linear_blend, BlendOptions, ContinuityCheck, FillOrdering, PhysicalBlend, Preconditioner,
+    Weights, JUMP_BOUND,
 };
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -42,6 +43,23 @@ pub struct BenchArgs {
     /// --no-sampled-start`), to compare with the default sampled start.
     #[arg(long)]
     no_sampled_start: bool,
+    /// Springs and volume suites: the inner CG's preconditioner, cholesky, aggregation (the
+    /// two-level cycle) or auto (aggregation where the factor would fill too much; the
+    /// default, as in `blend`).
+    #[arg(long, default_value = "auto", value_parser = parse_preconditioner)]
+    preconditioner: Preconditioner,
+}
+
+/// `cholesky|aggregation|auto` for `--preconditioner`.
+pub fn parse_preconditioner(s: &str) -> Result<Preconditioner, String> {
+    match s {
+        "cholesky" => Ok(Preconditioner::Cholesky),
+        "aggregation" => Ok(Preconditioner::Aggregation),
+        "auto" => Ok(Preconditioner::Auto),
+        _ => Err(format!(
+            "unknown preconditioner '{s}': use cholesky, aggregation or auto"
+        )),
+    }
 }
 
 /// How the springs suite runs each sequence.
@@ -108,6 +126,8 @@ fn time_sequence(
         "free_dofs": solver.num_free_dofs(),
         "factor_nnz": solver.factor_nnz(),
         "factor_flops": solver.summary().factor_flops,
+        "hessian_entries": solver.summary().hessian_entries,
+        "aggregates": solver.summary().aggregates,
         "ordering": solver.summary().ordering,
         "setup_ms": setup * 1e3,
         "ms_per_step": per_step * 1e3,
@@ -290,6 +310,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             threads: args.threads,
             options: BlendOptions {
                 sampled_start: !args.no_sampled_start,
+                preconditioner: args.preconditioner,
                 ..Default::default()
             },
         };
@@ -300,6 +321,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             args.steps,
             args.threads,
             !args.no_sampled_start,
+            args.preconditioner,
         )?;
     }
     if matches!(args.suite.as_str(), "memory") {

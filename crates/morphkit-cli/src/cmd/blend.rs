@@ -128,6 +128,13 @@ pub struct BlendArgs {
     /// where both starts reach the same equilibrium.
     #[arg(long)]
     pub no_sampled_start: bool,
+    /// Preconditioner of the Newton steps' inner CG: `cholesky` (a sparse factor), `aggregation`
+    /// (a two-level cycle on vertex aggregates, no fine factor: for large volumetric systems,
+    /// `--interior`), or `auto` (aggregation where the factor would cost more than 10⁴
+    /// multiply-adds per Hessian entry; counts, never timings). The equilibrium is the same
+    /// to the tolerance.
+    #[arg(long, default_value = "auto", value_parser = super::bench::parse_preconditioner)]
+    pub preconditioner: morphkit::springs::Preconditioner,
     /// Arithmetic of the Newton preconditioner's factor: `single` (half the memory, faster;
     /// the equilibrium is the same to the gradient tolerance) or `double`.
     #[arg(long, default_value = "single", value_parser = ["single", "double"])]
@@ -396,6 +403,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         refactor_every: a.refactor_every,
         keep_factor_cg: a.keep_factor_cg,
         sampled_start: !a.no_sampled_start,
+        preconditioner: a.preconditioner,
         factor_precision: if a.factor_precision == "double" {
             Precision::Double
         } else {

@@ -14,13 +14,18 @@
 //! - [`Cholesky`]: symmetric positive-definite solver with symbolic reuse and multiple
 //!   right-hand sides.
 //! - [`Dirichlet`]: eliminates fixed unknowns, moving their columns to the right-hand side.
+//! - [`AggregationLevels`] / [`AggregationPreconditioner`]: a two-level preconditioner for
+//!   systems over point coordinates (rigid modes of point aggregates as the coarse space),
+//!   for volumetric systems whose direct factor fills too much.
 
+mod aggregation;
 mod cholesky;
 mod dirichlet;
 mod matrix;
 pub mod metis;
 mod pattern;
 
+pub use aggregation::{AggregationLevels, AggregationPreconditioner};
 pub use cholesky::{Cholesky, Ordering, Precision};
 pub use dirichlet::Dirichlet;
 pub use matrix::SparseMatrix;

@@ -69,6 +69,10 @@ impl SymmetricPattern {
         Ok((p, values))
     }
 
+    /// Column pointers and row indices (lower triangle, rows sorted, diagonal first).
+    pub(crate) fn columns(&self) -> (&[usize], &[usize]) {
+        (&self.col_ptr, &self.row_idx)
+    }
     /// Matrix size `n`.
     pub fn n(&self) -> usize {
         self.n

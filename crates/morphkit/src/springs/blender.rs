@@ -5,7 +5,8 @@
 use super::constraints::{stretched_vertices, thin_bands, Components, Constraints};
 use super::newton::{projected_newton, trust_region, Problem, Workspace};
 use super::options::{
-    check_options, BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary,
+    check_options, BlendOptions, BlendResult, FrameStats, LinearSolver, Preconditioner, RigSummary,
+    AGGREGATION_FLOPS_PER_ENTRY,
 };
 use super::rotation_predictor::RotationPredictor;
 use super::sampled_start::{shifted, Sampler, StartSamples};
@@ -18,7 +19,7 @@ use super::{
     predictor, BlendError, FillOrdering, Predictor, SpringKind, SpringSet, StiffnessRule, Weights,
 };
 use crate::mesh::{validate, Point, ShapeSet, Topology};
-use crate::sparse::Ordering;
+use crate::sparse::{AggregationLevels, AggregationPreconditioner, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -85,6 +86,8 @@ pub(super) struct Rig {
     pub(super) is_fixed: Vec<bool>,
     /// Each target's correction fields of the sampled start.
     pub(super) samples: StartSamples,
+    /// The aggregation cycle's pattern, when it preconditions instead of the factor.
+    aggregation: Option<Arc<AggregationLevels>>,
     summary: RigSummary,
 }
 
@@ -256,7 +259,31 @@ impl PhysicalBlend {
         summary.factor_nnz = chol.factor_nnz();
         summary.factor_flops = chol.factor_flops();
         let nnz = system.pattern.nnz();
-        let ws = Workspace::new(chol, BlockHessian::zeros(block_pattern), nnz);
+        summary.hessian_entries = nnz;
+        let aggregate = match o.preconditioner {
+            Preconditioner::Aggregation => true,
+            Preconditioner::Cholesky => false,
+            Preconditioner::Auto => {
+                chol.factor_flops() > AGGREGATION_FLOPS_PER_ENTRY * nnz.max(1) as f64
+            }
+        } && o.linear_solver == LinearSolver::TrustRegion
+            && nnz > 0;
+        let aggregation = if aggregate {
+            let node_axis: Vec<(u32, u8)> = (0..system.dof_index.len())
+                .filter(|&k| system.dof_index[k] != u32::MAX)
+                .map(|k| ((k / 3) as u32, (k % 3) as u8))
+                .collect();
+            let levels = Arc::new(AggregationLevels::new(system.pattern.clone(), &node_axis)?);
+            summary.aggregates = levels.num_aggregates();
+            summary.coarse_flops = levels.coarse_flops();
+            Some(levels)
+        } else {
+            None
+        };
+        let mut ws = Workspace::new(chol, BlockHessian::zeros(block_pattern), nnz);
+        if let Some(levels) = &aggregation {
+            ws.aggregation = Some(AggregationPreconditioner::new(levels.clone())?);
+        }
         Ok(Self {
             rig: Arc::new(Rig {
                 shapes: shapes.clone(),
@@ -269,6 +296,7 @@ impl PhysicalBlend {
                 rotation,
                 is_fixed,
                 samples: StartSamples::new(shapes.len() - 1),
+                aggregation,
                 summary,
             }),
             ws,
@@ -369,12 +397,19 @@ impl PhysicalBlend {
         let threads = threads.clamp(1, items.len().max(1));
         let mut workspaces = Vec::with_capacity(threads - 1);
         for _ in 1..threads {
+            let aggregation = match &self.rig.aggregation {
+                Some(levels) => match AggregationPreconditioner::new(levels.clone()) {
+                    Ok(a) => Some(a),
+                    Err(_) => break,
+                },
+                None => None,
+            };
             match self.ws.chol.share_symbolic() {
-                Ok(chol) => workspaces.push(Workspace::new(
-                    chol,
-                    self.ws.blocks.clone(),
-                    self.ws.exact.len(),
-                )),
+                Ok(chol) => {
+                    let mut ws = Workspace::new(chol, self.ws.blocks.clone(), self.ws.exact.len());
+                    ws.aggregation = aggregation;
+                    workspaces.push(ws);
+                }
                 Err(_) => break,
             }
         }

@@ -107,8 +107,8 @@ pub use interior::{
 };
 pub use metrics::{blend_metrics, fold_metrics, linear_blend, BlendMetrics, FoldMetrics};
 pub use options::{
-    BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, Precision, Predictor,
-    RigSummary,
+    BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, Precision, Preconditioner,
+    Predictor, RigSummary, AGGREGATION_FLOPS_PER_ENTRY,
 };
 pub use spring_set::{Spring, SpringKind, SpringOptions, SpringSet, StiffnessRule};
 pub use terms::{HingeOptions, PointTarget};

@@ -25,7 +25,7 @@ use super::steihaug::{steihaug, StopRule, Termination};
 use super::system::FreeSystem;
 use super::terms::{total_gradient, BlockHessian, EnergyTerm, Held, HessianKind, TermParameters};
 use super::BlendError;
-use crate::sparse::{Cholesky, Precision, SolveError};
+use crate::sparse::{AggregationPreconditioner, Cholesky, Precision, SolveError};
 
 /// Per-thread buffers of a solve: numeric factor, block values, scalar values.
 pub(crate) struct Workspace {
@@ -45,6 +45,11 @@ pub(crate) struct Workspace {
     pub exact: Vec<f64>,
     /// Scalar values of the projected Hessian (the factorization input).
     pub projected: Vec<f64>,
+    /// The aggregation cycle that preconditions instead of [`Self::chol`]
+    /// ([`Preconditioner::Aggregation`](super::Preconditioner::Aggregation)).
+    pub aggregation: Option<AggregationPreconditioner>,
+    /// Vertex positions of the current iterate (the aggregation cycle's rigid modes).
+    points: Vec<[f64; 3]>,
 }
 
 impl Workspace {
@@ -58,6 +63,8 @@ impl Workspace {
             blocks,
             exact: vec![0.0; nnz],
             projected: vec![0.0; nnz],
+            aggregation: None,
+            points: Vec::new(),
         }
     }
 
@@ -129,6 +136,9 @@ impl Problem<'_> {
     /// ladder) that makes it positive definite: flat regions have no stiffness normal to their
     /// plane at rest, and round-off can make such a pivot non-positive.
     fn factorize(&self, ws: &mut Workspace, stats: &mut FrameStats) -> Result<(), BlendError> {
+        if ws.aggregation.is_some() {
+            return self.factorize_with_ladder(ws, stats);
+        }
         match self.factorize_with_ladder(ws, stats) {
             Err(BlendError::Solve(SolveError::NotPositiveDefinite { .. }))
                 if !ws.use_double && ws.chol.precision() == Precision::Single =>
@@ -162,8 +172,14 @@ impl Problem<'_> {
             }
             added = shift;
             stats.factorizations += 1;
-            let (chol, values, _) = ws.parts();
-            match chol.factorize(values) {
+            let attempt = match ws.aggregation.as_mut() {
+                Some(agg) => agg.refresh(&ws.projected, &ws.points),
+                None => {
+                    let (chol, values, _) = ws.parts();
+                    chol.factorize(values)
+                }
+            };
+            match attempt {
                 Ok(()) => break Ok(()),
                 Err(SolveError::NotPositiveDefinite { .. }) if shift < 1e-2 * mean => {
                     shift *= 100.0;
@@ -247,6 +263,11 @@ pub(crate) fn trust_region(
                 prob.hessians(ws, x);
                 exact_current = true;
             }
+            if ws.aggregation.is_some() {
+                ws.points.clear();
+                ws.points
+                    .extend(x.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
+            }
             prob.factorize(ws, stats)?;
             refactor = false;
         }
@@ -261,17 +282,36 @@ pub(crate) fn trust_region(
             max_iter: (prob.options.cg_iterations.max(1) * extend).min(400),
         };
         let cg_before = stats.cg_iterations;
-        let (chol, _, exact) = ws.parts();
-        let mut op = |p: &[f64], out: &mut [f64]| sys.mul(exact, p, out);
-        let mut pre = |r: &mut [f64]| chol.solve_one(r).is_ok();
-        let result = steihaug(
-            &mut op,
-            &mut pre,
-            &gfree,
-            &mut radius, // NaN at first: set from the first preconditioned gradient
-            &stop,
-            &mut stats.cg_iterations,
-        );
+        let result = {
+            type Pre<'b> = Box<dyn FnMut(&mut [f64]) -> bool + 'b>;
+            type Op<'b> = Box<dyn FnMut(&[f64], &mut [f64]) + 'b>;
+            let (mut pre, mut op): (Pre<'_>, Op<'_>) = match ws.aggregation.as_mut() {
+                Some(agg) => {
+                    // The operator through the cycle's own (32-bit) copy of the pattern.
+                    let levels = agg.levels().clone();
+                    let exact = &ws.exact;
+                    (
+                        Box::new(|r: &mut [f64]| agg.apply(r).is_ok()),
+                        Box::new(move |p: &[f64], out: &mut [f64]| levels.mul(exact, p, out)),
+                    )
+                }
+                None => {
+                    let (chol, _, exact) = ws.parts();
+                    (
+                        Box::new(|r: &mut [f64]| chol.solve_one(r).is_ok()),
+                        Box::new(move |p: &[f64], out: &mut [f64]| sys.mul(exact, p, out)),
+                    )
+                }
+            };
+            steihaug(
+                &mut *op,
+                &mut *pre,
+                &gfree,
+                &mut radius, // NaN at first: set from the first preconditioned gradient
+                &stop,
+                &mut stats.cg_iterations,
+            )
+        };
         let Some(step) = result else {
             refactor = true;
             continue;

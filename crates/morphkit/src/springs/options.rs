@@ -74,6 +74,9 @@ pub struct BlendOptions {
     pub linear_solver: LinearSolver,
     /// Fill-reducing ordering of the Hessian. Default [`FillOrdering::Cheapest`].
     pub ordering: FillOrdering,
+    /// Preconditioner of the trust-region iteration's inner CG ([`LinearSolver::TrustRegion`]
+    /// only). Default [`Preconditioner::Auto`].
+    pub preconditioner: Preconditioner,
     /// Inner conjugate-gradient iterations per trust-region step before the preconditioner
     /// is refreshed (doubled while steps keep running out). Default `40`. A count, never a
     /// time, so that results do not depend on the machine's load.
@@ -181,6 +184,28 @@ pub enum FillOrdering {
     Cheapest,
 }
 
+/// The preconditioner (and trust-region norm) of [`LinearSolver::TrustRegion`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Preconditioner {
+    /// A sparse Cholesky factor of the projected Hessian: near the equilibrium the inner CG
+    /// converges in one or two iterations, at the price of the factor's fill.
+    Cholesky,
+    /// The two-level aggregation cycle of [`crate::sparse::AggregationPreconditioner`] on
+    /// the projected Hessian (rigid modes of vertex aggregates as the coarse space): no fine
+    /// factor at all, more CG iterations. For volumetric systems, whose factor fills with the
+    /// body's cross-sections.
+    Aggregation,
+    /// [`Self::Aggregation`] when the Cholesky factor would cost more than
+    /// [`AGGREGATION_FLOPS_PER_ENTRY`] multiply-adds per stored Hessian entry (a count from the
+    /// symbolic analysis, never a timing), [`Self::Cholesky`] otherwise. The default.
+    #[default]
+    Auto,
+}
+
+/// The fill threshold of [`Preconditioner::Auto`]: factor multiply-adds per stored
+/// lower-triangle entry of the Hessian above which the aggregation cycle is used.
+pub const AGGREGATION_FLOPS_PER_ENTRY: f64 = 1.0e4;
+
 /// How each Newton system is solved.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum LinearSolver {
@@ -210,6 +235,7 @@ impl Default for BlendOptions {
             sampled_start: true,
             linear_solver: LinearSolver::TrustRegion,
             ordering: FillOrdering::Cheapest,
+            preconditioner: Preconditioner::Auto,
             cg_iterations: 40,
             factor_precision: Precision::Single,
             refactor_every: 1,
@@ -267,6 +293,13 @@ pub struct RigSummary {
     pub hinges: usize,
     /// Vertices held by boundary conditions (user-given or automatic).
     pub fixed_vertices: usize,
+    /// Stored (lower-triangle) entries of the Newton matrix.
+    pub hessian_entries: usize,
+    /// Aggregates of the [`Preconditioner::Aggregation`] cycle (`0`: the Cholesky factor
+    /// preconditions, and [`Self::factor_nnz`] / [`Self::factor_flops`] are its size).
+    pub aggregates: usize,
+    /// Multiply-adds of one factorization of the aggregation cycle's coarse matrix.
+    pub coarse_flops: f64,
     /// Vertices of over-stretched (kinematic) triangles that follow the linear blend.
     pub kinematic_vertices: usize,
     /// Vertices of thin bands that follow the predictor
