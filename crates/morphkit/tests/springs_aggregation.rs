@@ -5,31 +5,12 @@
 
 mod common;
 
-use morphkit::mesh::{bbox_diagonal, generate, Point, ShapeSet};
+use common::{enclosed_volume as volume, max_dist};
+use morphkit::mesh::{bbox_diagonal, generate, ShapeSet};
 use morphkit::springs::{
     AnchorOptions, AnchorPlacement, BlendOptions, InteriorMode, InteriorOptions, PhysicalBlend,
     Preconditioner, VolumetricBlend, Weights,
 };
-
-fn max_dist(a: &[Point], b: &[Point]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| {
-            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-        })
-        .fold(0.0, f64::max)
-}
-
-fn volume(p: &[Point], tris: &[[u32; 3]]) -> f64 {
-    tris.iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| p[i as usize]);
-            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                + a[2] * (b[0] * c[1] - b[1] * c[0]))
-                / 6.0
-        })
-        .sum()
-}
 
 /// A closed tube bent by 120°, about 1.5k vertices with its lattice interior.
 fn bent_tube() -> ShapeSet {

@@ -5,6 +5,8 @@
 
 mod common;
 
+use common::enclosed_volume as volume;
+
 use morphkit::geom::{kabsch, slerp};
 use morphkit::mesh::{bbox_diagonal, generate, Point, ShapeSet};
 use morphkit::springs::interior::{tetgen, VolumeResult};
@@ -22,17 +24,6 @@ fn max_dist(a: &[Point], b: &[Point]) -> f64 {
         .zip(b)
         .map(|(p, q)| dist(*p, *q))
         .fold(0.0, f64::max)
-}
-
-fn volume(p: &[Point], tris: &[[u32; 3]]) -> f64 {
-    tris.iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| p[i as usize]);
-            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                + a[2] * (b[0] * c[1] - b[1] * c[0]))
-                / 6.0
-        })
-        .sum()
 }
 
 fn lattice(density: f64) -> InteriorOptions {
