@@ -1,4 +1,5 @@
 use super::*;
+use crate::sparse::{Ordering, SymmetricPattern};
 
 /// A spring lattice `nx × ny × nz` (every pair of points within √3 spacings), bent about the
 /// z axis so that the rigid modes vary over the body, its `z = 0` layer fixed. Returns the

@@ -19,6 +19,7 @@
 //!   for volumetric systems whose direct factor fills too much.
 
 mod aggregation;
+mod aggregation_cycle;
 mod cholesky;
 mod dirichlet;
 mod matrix;
