@@ -5,7 +5,8 @@
 
 mod common;
 
-use common::{enclosed_volume as volume, max_dist};
+use common::max_dist;
+use morphkit::mesh::enclosed_volume as volume;
 use morphkit::mesh::{bbox_diagonal, generate, ShapeSet};
 use morphkit::springs::{
     AnchorOptions, AnchorPlacement, BlendOptions, InteriorMode, InteriorOptions, PhysicalBlend,

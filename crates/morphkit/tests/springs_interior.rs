@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::enclosed_volume as volume;
+use morphkit::mesh::enclosed_volume as volume;
 
 use morphkit::geom::{kabsch, slerp};
 use morphkit::mesh::{bbox_diagonal, generate, Point, ShapeSet};

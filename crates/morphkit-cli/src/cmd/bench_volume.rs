@@ -8,7 +8,7 @@
 //! total differs from the lattice's. Every row also gives the relative volume deviation at
 //! α = 0.5.
 
-use morphkit::mesh::{generate, ShapeSet};
+use morphkit::mesh::{enclosed_volume, generate, ShapeSet};
 use morphkit::springs::interior::lattice;
 use morphkit::springs::{
     AnchorOptions, BlendOptions, FillOrdering, InteriorMode, InteriorOptions, Preconditioner,
@@ -49,18 +49,6 @@ fn tube_with_total(total: usize, o: &InteriorOptions) -> ShapeSet {
     tube(surface)
 }
 
-/// Enclosed volume of the surface `p`.
-fn enclosed(p: &[morphkit::mesh::Point], tris: &[[u32; 3]]) -> f64 {
-    tris.iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| p[i as usize]);
-            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                + a[2] * (b[0] * c[1] - b[1] * c[0]))
-                / 6.0
-        })
-        .sum()
-}
-
 /// One row: set-up, `steps` timed steps, and the relative volume deviation at α = 0.5 from
 /// $(V_0 + V_1)/2$ (one more, untimed, solve).
 fn row(
@@ -90,8 +78,9 @@ fn row(
     let per_step = t1.elapsed().as_secs_f64() / steps as f64;
     let half = v.solve(&Weights::Alpha(0.5))?;
     let t = shapes.triangles();
-    let mid = 0.5 * (enclosed(shapes.positions(0), t) + enclosed(shapes.positions(1), t));
-    let deviation = (enclosed(&half.positions, t) - mid).abs() / mid.abs();
+    let mid =
+        0.5 * (enclosed_volume(shapes.positions(0), t) + enclosed_volume(shapes.positions(1), t));
+    let deviation = (enclosed_volume(&half.positions, t) - mid).abs() / mid.abs();
     let rep = v.report();
     let n_total = rep.surface_vertices + rep.interior_vertices;
     let springs = v.physical().summary().springs + rep.internal_springs;

@@ -178,6 +178,23 @@ mod tests {
     use crate::mesh::{validate, Topology};
 
     #[test]
+    fn enclosed_volume_of_a_bar_is_exact_and_flips_with_orientation() {
+        let m = bar(4.0, 0.6, 2, 16);
+        let v = crate::mesh::enclosed_volume(&m.positions, &m.triangles);
+        assert!((v - 4.0 * 0.6 * 0.6).abs() < 1e-12, "{v}");
+        // Moved away from the origin: the same volume (closed surface).
+        let moved: Vec<_> = m
+            .positions
+            .iter()
+            .map(|p| [p[0] + 7.0, p[1] - 3.0, p[2] + 2.0])
+            .collect();
+        let w = crate::mesh::enclosed_volume(&moved, &m.triangles);
+        assert!((w - v).abs() < 1e-10, "{w} vs {v}");
+        let flipped: Vec<[u32; 3]> = m.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect();
+        assert!((crate::mesh::enclosed_volume(&m.positions, &flipped) + v).abs() < 1e-12);
+    }
+
+    #[test]
     fn generated_meshes_are_valid_and_oriented() {
         for (m, closed) in [
             (grid(4, 3, 1.0, 1.0), false),
@@ -193,15 +210,7 @@ mod tests {
             assert!(t.is_consistently_oriented());
             if closed {
                 // Outward orientation: positive signed volume.
-                let v: f64 = m
-                    .triangles
-                    .iter()
-                    .map(|t| {
-                        let [a, b, c] = t.map(|i| nalgebra::Vector3::from(m.positions[i as usize]));
-                        a.dot(&b.cross(&c)) / 6.0
-                    })
-                    .sum();
-                assert!(v > 0.0);
+                assert!(crate::mesh::enclosed_volume(&m.positions, &m.triangles) > 0.0);
             }
         }
     }

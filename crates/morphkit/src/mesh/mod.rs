@@ -159,6 +159,20 @@ pub fn bbox_diagonal(p: &[Point]) -> f64 {
     norm(sub(hi, lo))
 }
 
+/// Signed volume enclosed by the triangles `tris` over the points `p`: $\sum_t a \cdot (b
+/// \times c) / 6$ over triangles $t = (a, b, c)$, positive when they wind counter-clockwise
+/// seen from outside. Meaningful for closed meshes; independent of the origin only then.
+pub fn enclosed_volume(p: &[Point], tris: &[[u32; 3]]) -> f64 {
+    tris.iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| p[i as usize]);
+            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                + a[2] * (b[0] * c[1] - b[1] * c[0]))
+                / 6.0
+        })
+        .sum()
+}
+
 /// Unnormalised normal of a triangle given by indices into `p`.
 pub fn triangle_normal(p: &[Point], t: [u32; 3]) -> Point {
     let a = p[t[0] as usize];

@@ -171,17 +171,6 @@ fn display_mesh((v, t): (Vec<Vector>, Vec<[u32; 3]>)) -> TriMesh {
     TriMesh::new(v.into_iter().map(to_point).collect(), t)
 }
 
-/// Signed volume enclosed by a closed mesh (positive for outward normals).
-fn signed_volume(m: &TriMesh) -> f64 {
-    m.triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| to_vec(m.positions[i as usize]));
-            a.dot(b.cross(c)) / 6.0
-        })
-        .sum()
-}
-
 impl Obstacle {
     /// A primitive obstacle at the identity pose. `display_size` is the side of the square
     /// that shows a plane in viewers (planes are infinite; it does not affect collisions).
@@ -277,7 +266,7 @@ impl Obstacle {
             });
         }
         let mut triangles = mesh.triangles.clone();
-        if signed_volume(mesh) < 0.0 {
+        if crate::mesh::enclosed_volume(&mesh.positions, &mesh.triangles) < 0.0 {
             for t in &mut triangles {
                 t.swap(1, 2);
             }

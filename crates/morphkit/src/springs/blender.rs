@@ -5,8 +5,7 @@
 use super::constraints::{stretched_vertices, thin_bands, Components, Constraints};
 use super::newton::{projected_newton, trust_region, Problem, Workspace};
 use super::options::{
-    check_options, BlendOptions, BlendResult, FrameStats, LinearSolver, Preconditioner, RigSummary,
-    AGGREGATION_FLOPS_PER_ENTRY,
+    check_options, BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary,
 };
 use super::rotation_predictor::RotationPredictor;
 use super::sampled_start::{shifted, Sampler, StartSamples};
@@ -15,9 +14,7 @@ use super::terms::{
     BlockHessian, BlockPattern, EnergyTerm, Held, HingeTerm, PointTarget, PointTerm, SpringTerm,
     TermParameters,
 };
-use super::{
-    predictor, BlendError, FillOrdering, Predictor, SpringKind, SpringSet, StiffnessRule, Weights,
-};
+use super::{predictor, BlendError, FillOrdering, Predictor, SpringSet, StiffnessRule, Weights};
 use crate::mesh::{validate, Point, ShapeSet, Topology};
 use crate::sparse::{AggregationLevels, AggregationPreconditioner, Ordering};
 use std::sync::Arc;
@@ -99,23 +96,6 @@ impl std::fmt::Debug for PhysicalBlend {
     }
 }
 
-/// Refuses shapes in which no structure spring has positive length (all vertices coincide).
-fn check_degenerate(shapes: &ShapeSet, springs: &SpringSet) -> Result<(), BlendError> {
-    for s in 0..shapes.len() {
-        let any = springs
-            .springs()
-            .iter()
-            .zip(springs.rest_lengths(s))
-            .any(|(q, &r)| q.kind == SpringKind::Structure && r > 0.0);
-        if !any {
-            return Err(BlendError::DegenerateShape {
-                shape: shapes.name(s).to_string(),
-            });
-        }
-    }
-    Ok(())
-}
-
 impl PhysicalBlend {
     /// Builds springs, hinges, constraints, the Hessian pattern and its symbolic factorization.
     pub fn new(shapes: &ShapeSet, options: &BlendOptions) -> Result<Self, BlendError> {
@@ -146,23 +126,9 @@ impl PhysicalBlend {
                 },
             });
         }
-        check_degenerate(shapes, &springs)?;
+        springs.check_degenerate(shapes)?;
         // μ of the hinges from the base's structure springs (weight-independent).
-        let (mut ksum, mut lsum, mut count) = (0.0, 0.0, 0usize);
-        for (q, s) in springs.springs().iter().enumerate() {
-            if s.kind == SpringKind::Structure {
-                let r = springs.rest_lengths(0)[q];
-                if r > 0.0 {
-                    ksum += match o.springs.stiffness {
-                        StiffnessRule::InverseRestLength => springs.stiffness_scale(q) / r,
-                        StiffnessRule::Uniform => springs.stiffness_scale(q),
-                    };
-                    lsum += r * r;
-                    count += 1;
-                }
-            }
-        }
-        let count = count.max(1) as f64;
+        let (mean_stiffness, mean_square_length) = springs.base_means(o.springs.stiffness);
         let tolerance = o.gradient_tolerance
             * o.springs.k0
             * match o.springs.stiffness {
@@ -172,7 +138,13 @@ impl PhysicalBlend {
                     r.iter().sum::<f64>() / r.len() as f64
                 }
             };
-        let hinges = HingeTerm::new(shapes, &topology, &o.hinges, ksum / count, lsum / count);
+        let hinges = HingeTerm::new(
+            shapes,
+            &topology,
+            &o.hinges,
+            mean_stiffness,
+            mean_square_length,
+        );
         let mut summary = RigSummary {
             vertices: n,
             springs: springs.len(),
@@ -260,20 +232,8 @@ impl PhysicalBlend {
         summary.factor_flops = chol.factor_flops();
         let nnz = system.pattern.nnz();
         summary.hessian_entries = nnz;
-        let aggregate = match o.preconditioner {
-            Preconditioner::Aggregation => true,
-            Preconditioner::Cholesky => false,
-            Preconditioner::Auto => {
-                chol.factor_flops() > AGGREGATION_FLOPS_PER_ENTRY * nnz.max(1) as f64
-            }
-        } && o.linear_solver == LinearSolver::TrustRegion
-            && nnz > 0;
-        let aggregation = if aggregate {
-            let node_axis: Vec<(u32, u8)> = (0..system.dof_index.len())
-                .filter(|&k| system.dof_index[k] != u32::MAX)
-                .map(|k| ((k / 3) as u32, (k % 3) as u8))
-                .collect();
-            let levels = Arc::new(AggregationLevels::new(system.pattern.clone(), &node_axis)?);
+        let aggregation = if o.uses_aggregation(chol.factor_flops(), nnz) {
+            let levels = Arc::new(system.aggregation_levels()?);
             summary.aggregates = levels.num_aggregates();
             summary.coarse_flops = levels.coarse_flops();
             Some(levels)
@@ -292,7 +252,7 @@ impl PhysicalBlend {
                 system,
                 options: o.clone(),
                 tolerance,
-                mean_stiffness: ksum / count,
+                mean_stiffness,
                 rotation,
                 is_fixed,
                 samples: StartSamples::new(shapes.len() - 1),

@@ -40,17 +40,6 @@ pub fn linear_blend(shapes: &ShapeSet, weights: &Weights) -> Result<Vec<Point>, 
     Ok(out)
 }
 
-fn signed_volume(p: &[Point], tris: &[[u32; 3]]) -> f64 {
-    tris.iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| p[i as usize]);
-            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                + a[2] * (b[0] * c[1] - b[1] * c[0]))
-                / 6.0
-        })
-        .sum()
-}
-
 /// Measures `positions` against the targets interpolated with `weights`.
 pub fn blend_metrics(
     shapes: &ShapeSet,
@@ -91,11 +80,11 @@ pub fn blend_metrics(
         }
     }
     let (volume, volume_ratio) = if topology.is_closed() {
-        let v = signed_volume(positions, shapes.triangles());
+        let v = crate::mesh::enclosed_volume(positions, shapes.triangles());
         let target: f64 = c
             .iter()
             .enumerate()
-            .map(|(s, w)| w * signed_volume(shapes.positions(s), shapes.triangles()))
+            .map(|(s, w)| w * crate::mesh::enclosed_volume(shapes.positions(s), shapes.triangles()))
             .sum();
         (Some(v), (target.abs() > tiny).then(|| v / target))
     } else {

@@ -206,6 +206,23 @@ pub enum Preconditioner {
 /// lower-triangle entry of the Hessian above which the aggregation cycle is used.
 pub const AGGREGATION_FLOPS_PER_ENTRY: f64 = 1.0e4;
 
+impl BlendOptions {
+    /// Whether the inner CG is preconditioned by the aggregation cycle rather than the
+    /// factor, for a factorization of `factor_flops` multiply-adds of a Hessian with
+    /// `hessian_nnz` stored entries (see [`Preconditioner`]). Only the trust-region iteration
+    /// has an inner CG.
+    pub(crate) fn uses_aggregation(&self, factor_flops: f64, hessian_nnz: usize) -> bool {
+        let wanted = match self.preconditioner {
+            Preconditioner::Aggregation => true,
+            Preconditioner::Cholesky => false,
+            Preconditioner::Auto => {
+                factor_flops > AGGREGATION_FLOPS_PER_ENTRY * hessian_nnz.max(1) as f64
+            }
+        };
+        wanted && self.linear_solver == LinearSolver::TrustRegion && hessian_nnz > 0
+    }
+}
+
 /// How each Newton system is solved.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum LinearSolver {

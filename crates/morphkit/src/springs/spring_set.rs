@@ -1,5 +1,6 @@
 //! Spring structure (Ma et al. 2012, Sec. 3.1) and per-target rest lengths (Sec. 3.2).
 
+use super::BlendError;
 use crate::mesh::{norm, sub, Point, ShapeSet, Topology};
 
 /// What a spring models.
@@ -83,6 +84,46 @@ pub struct SpringSet {
 }
 
 impl SpringSet {
+    /// Mean stiffness scale and mean squared rest length of the base's structure springs of
+    /// positive length, under `rule` (the stiffness without $k_0$): the units of the hinges'
+    /// $\mu$ and of point-target stiffness.
+    pub fn base_means(&self, rule: StiffnessRule) -> (f64, f64) {
+        let (mut ksum, mut lsum, mut count) = (0.0, 0.0, 0usize);
+        for (q, s) in self.springs().iter().enumerate() {
+            if s.kind == SpringKind::Structure {
+                let r = self.rest_lengths(0)[q];
+                if r > 0.0 {
+                    ksum += match rule {
+                        StiffnessRule::InverseRestLength => self.stiffness_scale(q) / r,
+                        StiffnessRule::Uniform => self.stiffness_scale(q),
+                    };
+                    lsum += r * r;
+                    count += 1;
+                }
+            }
+        }
+        let count = count.max(1) as f64;
+        (ksum / count, lsum / count)
+    }
+
+    /// Refuses shapes in which no structure spring has positive length (all its vertices
+    /// coincide): [`BlendError::DegenerateShape`] names the first.
+    pub fn check_degenerate(&self, shapes: &ShapeSet) -> Result<(), BlendError> {
+        for s in 0..shapes.len() {
+            let any = self
+                .springs()
+                .iter()
+                .zip(self.rest_lengths(s))
+                .any(|(q, &r)| q.kind == SpringKind::Structure && r > 0.0);
+            if !any {
+                return Err(BlendError::DegenerateShape {
+                    shape: shapes.name(s).to_string(),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Builds the springs from the shared connectivity and measures them in every shape.
     pub fn new(shapes: &ShapeSet, topology: &Topology, options: &SpringOptions) -> Self {
         let mut springs = Vec::new();

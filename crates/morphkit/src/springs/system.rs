@@ -6,7 +6,9 @@
 //! gauge pins, kinematic vertices) are eliminated, so the matrix is `n_free × n_free`.
 
 use super::terms::{BlockHessian, BlockPattern};
-use crate::sparse::{Cholesky, Ordering, Precision, SolveError, SymmetricPattern};
+use crate::sparse::{
+    AggregationLevels, Cholesky, Ordering, Precision, SolveError, SymmetricPattern,
+};
 use std::sync::Arc;
 
 const NONE: u32 = u32::MAX;
@@ -139,6 +141,16 @@ impl FreeSystem {
             .zip(&self.dof_index)
             .filter(|(_, i)| **i != NONE)
             .fold(0.0, |m, (v, _)| m.max(v.abs()))
+    }
+
+    /// The aggregation cycle's set-up for this system's pattern, the free coordinates grouped
+    /// by vertex.
+    pub fn aggregation_levels(&self) -> Result<AggregationLevels, SolveError> {
+        let node_axis: Vec<(u32, u8)> = (0..self.dof_index.len())
+            .filter(|&k| self.dof_index[k] != NONE)
+            .map(|k| ((k / 3) as u32, (k % 3) as u8))
+            .collect();
+        AggregationLevels::new(self.pattern.clone(), &node_axis)
     }
 
     /// Symbolic analysis of the scalar pattern with the cheapest of `orderings` (fewest

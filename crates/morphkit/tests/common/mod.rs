@@ -93,18 +93,6 @@ pub fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// Signed volume enclosed by the triangles `tris` over the points `p`.
-pub fn enclosed_volume(p: &[[f64; 3]], tris: &[[u32; 3]]) -> f64 {
-    tris.iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| p[i as usize]);
-            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                + a[2] * (b[0] * c[1] - b[1] * c[0]))
-                / 6.0
-        })
-        .sum()
-}
-
 /// A closed bar (4 × 0.6 × 0.6, 16 segments) and the same bar bent by 90° over its second
 /// half: its first half moves in no shape, so `FixedVertices::Auto` fixes it.
 pub fn bent_bar() -> morphkit::mesh::ShapeSet {
