@@ -285,6 +285,30 @@ mod tests {
     use crate::mesh::TriMesh;
 
     #[test]
+    fn base_means_and_degenerate_shapes() {
+        // A right triangle with legs 3 and 4: edges 3, 4, 5.
+        let p = vec![[0.0, 0.0, 0.0], [3.0, 0.0, 0.0], [0.0, 4.0, 0.0]];
+        let m = TriMesh::new(p.clone(), vec![[0, 1, 2]]);
+        let flat = vec![[0.0, 0.0, 0.0]; 3];
+        let set = ShapeSet::new(m.clone(), vec![("a".into(), p), ("b".into(), flat)]).unwrap();
+        let s = SpringSet::new(&set, &Topology::new(3, &m.triangles), &Default::default());
+        let k0 = SpringOptions::default().k0;
+        let (k, l2) = s.base_means(StiffnessRule::Uniform);
+        assert!(
+            (k - k0).abs() < 1e-15 * k0 && (l2 - 50.0 / 3.0).abs() < 1e-12,
+            "{k} {l2}"
+        );
+        let (k, _) = s.base_means(StiffnessRule::InverseRestLength);
+        let want = k0 * (1.0 / 3.0 + 1.0 / 4.0 + 1.0 / 5.0) / 3.0;
+        assert!((k - want).abs() < 1e-15 * want, "{k} vs {want}");
+        // Shape "b" has every vertex at one point.
+        match s.check_degenerate(&set) {
+            Err(BlendError::DegenerateShape { shape }) => assert_eq!(shape, "b"),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
     fn springs_between_coincident_vertices_are_left_out() {
         // Two triangles meeting at vertex 2; vertex 4 sits exactly on vertex 0 (a UV seam).
         let p = vec![
