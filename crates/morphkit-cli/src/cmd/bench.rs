@@ -166,8 +166,9 @@ fn time_sequence(
     Ok(row)
 }
 
-/// A closed tube with about `target` vertices, bent by 90° over its whole length.
-fn bent_tube(target: usize) -> ShapeSet {
+/// A closed tube with about `target` vertices, bent by 90° over its whole length (also the
+/// surface of the volume suite's tubes).
+pub(super) fn bent_tube(target: usize) -> ShapeSet {
     let around = ((target as f64 / 4.0).sqrt()).round().max(6.0) as usize;
     let along = (target / around).max(2) - 1;
     let m = generate::tube(0.5, 4.0, around, along, true);

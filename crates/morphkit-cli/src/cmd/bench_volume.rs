@@ -8,7 +8,8 @@
 //! total differs from the lattice's. Every row also gives the relative volume deviation at
 //! α = 0.5.
 
-use morphkit::mesh::{enclosed_volume, generate, ShapeSet};
+use super::bench::bent_tube;
+use morphkit::mesh::{enclosed_volume, ShapeSet};
 use morphkit::springs::interior::lattice;
 use morphkit::springs::{
     AnchorOptions, BlendOptions, FillOrdering, InteriorMode, InteriorOptions, Preconditioner,
@@ -17,26 +18,11 @@ use morphkit::springs::{
 use serde_json::json;
 use std::time::Instant;
 
-fn tube(surface: usize) -> ShapeSet {
-    let around = ((surface as f64 / 4.0).sqrt()).round().max(6.0) as usize;
-    let along = (surface / around).max(2) - 1;
-    let m = generate::tube(0.5, 4.0, around, along, true);
-    let bent = generate::bend(&m.positions, 0.0, 4.0, 90f64.to_radians());
-    ShapeSet::new(
-        m.clone(),
-        vec![
-            ("straight".into(), m.positions.clone()),
-            ("bent".into(), bent),
-        ],
-    )
-    .expect("generated shapes share connectivity")
-}
-
 /// A bent tube whose surface plus interior has about `total` vertices.
 fn tube_with_total(total: usize, o: &InteriorOptions) -> ShapeSet {
     let mut surface = total / 2;
     for _ in 0..4 {
-        let s = tube(surface);
+        let s = bent_tube(surface);
         let inner = lattice::build(s.positions(0), s.triangles(), o)
             .points
             .len();
@@ -46,7 +32,7 @@ fn tube_with_total(total: usize, o: &InteriorOptions) -> ShapeSet {
         }
         surface = ((surface as f64) * total as f64 / got as f64).round() as usize;
     }
-    tube(surface)
+    bent_tube(surface)
 }
 
 /// One row: set-up, `steps` timed steps, and the relative volume deviation at α = 0.5 from
