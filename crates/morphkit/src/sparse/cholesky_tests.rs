@@ -78,6 +78,40 @@ fn single_precision_factor_is_an_f32_accurate_solver() {
 }
 
 #[test]
+fn a_frozen_factor_solves_its_own_matrix_on_another_solver() {
+    let n = 400;
+    let t = random_spd(n, 9);
+    let (p, v) = SymmetricPattern::from_triplets(n, &t).unwrap();
+    let v2: Vec<f64> = v
+        .iter()
+        .map(|x| if *x < 0.0 { 0.5 * x } else { x + 1.0 })
+        .collect();
+    for precision in [Precision::Single, Precision::Double] {
+        let mut a = Cholesky::analyze_with(p.clone(), Ordering::Amd, precision).unwrap();
+        assert!(a.freeze().is_err(), "nothing factored yet");
+        a.factorize(&v).unwrap();
+        let frozen = a.freeze().unwrap();
+        assert_eq!(frozen.bytes() as u64, a.factor_bytes());
+        let b: Vec<f64> = (0..n).map(|i| (0.3 * i as f64).cos()).collect();
+        let mut want = b.clone();
+        a.solve_one(&mut want).unwrap();
+        // Another solver sharing the analysis, factored with other values: the frozen
+        // factor still solves the first matrix, bit for bit, and leaves the solver's own.
+        let mut other = a.share_symbolic_with(precision).unwrap();
+        other.factorize(&v2).unwrap();
+        let mut got = b.clone();
+        other.solve_one_with(&frozen, &mut got).unwrap();
+        assert_eq!(got, want, "{precision:?}");
+        let mut own = b.clone();
+        other.solve_one(&mut own).unwrap();
+        assert!(residual(&p, &v2, &own, &b) < 1e-4, "{precision:?}");
+        // A solver of another analysis refuses it.
+        let mut stranger = Cholesky::analyze_with(p.clone(), Ordering::Amd, precision).unwrap();
+        assert!(stranger.solve_one_with(&frozen, &mut got).is_err());
+    }
+}
+
+#[test]
 fn pattern_reuse_matches_a_fresh_factorization() {
     let n = 500;
     let t = random_spd(n, 7);

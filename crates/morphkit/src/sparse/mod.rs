@@ -27,7 +27,7 @@ pub mod metis;
 mod pattern;
 
 pub use aggregation::{AggregationLevels, AggregationPreconditioner};
-pub use cholesky::{Cholesky, Ordering, Precision};
+pub use cholesky::{Cholesky, FrozenFactor, Ordering, Precision};
 pub use dirichlet::Dirichlet;
 pub use matrix::SparseMatrix;
 pub use pattern::SymmetricPattern;
