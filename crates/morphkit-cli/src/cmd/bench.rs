@@ -48,6 +48,10 @@ pub struct BenchArgs {
     /// default, as in `blend`).
     #[arg(long, default_value = "auto", value_parser = parse_preconditioner)]
     preconditioner: Preconditioner,
+    /// Springs, volume and scene suites: every frame factorizes its own Hessians (as `blend
+    /// --no-reference-factors`), to compare with the default reference factors.
+    #[arg(long)]
+    no_reference_factors: bool,
 }
 
 /// `cholesky|aggregation|auto` for `--preconditioner`.
@@ -305,6 +309,11 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         .output_opt("--report", args.report.as_ref(), Kind::Json)
         .check()?;
     let mut report = json!({ "threads": args.threads });
+    let reference_factor_bytes = if args.no_reference_factors {
+        0
+    } else {
+        BlendOptions::default().reference_factor_bytes
+    };
     if matches!(args.suite.as_str(), "springs" | "all") {
         let seq = Sequence {
             steps: args.steps,
@@ -312,6 +321,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             options: BlendOptions {
                 sampled_start: !args.no_sampled_start,
                 preconditioner: args.preconditioner,
+                reference_factor_bytes,
                 ..Default::default()
             },
         };
@@ -323,14 +333,19 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             args.threads,
             !args.no_sampled_start,
             args.preconditioner,
+            reference_factor_bytes,
         )?;
     }
     if matches!(args.suite.as_str(), "memory") {
         report["memory"] = memory_suite()?;
     }
     if matches!(args.suite.as_str(), "scene") {
-        report["scene"] =
-            super::bench_scene::run_scene_bench(&bent_tube(18_000), 3, !args.no_sampled_start)?;
+        report["scene"] = super::bench_scene::run_scene_bench(
+            &bent_tube(18_000),
+            3,
+            !args.no_sampled_start,
+            reference_factor_bytes,
+        )?;
     }
     if matches!(args.suite.as_str(), "transfer" | "all") {
         match data.as_deref() {

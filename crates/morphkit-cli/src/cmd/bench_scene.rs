@@ -45,9 +45,11 @@ pub fn run_scene_bench(
     shapes: &ShapeSet,
     repeats: usize,
     sampled_start: bool,
+    reference_factor_bytes: u64,
 ) -> anyhow::Result<serde_json::Value> {
     let opts = BlendOptions {
         sampled_start,
+        reference_factor_bytes,
         ..Default::default()
     };
     // Not a sample weight of the sampled start (α = ½ would start at its equilibrium).

@@ -122,11 +122,13 @@ pub fn run_volume_bench(
     threads: usize,
     sampled_start: bool,
     preconditioner: Preconditioner,
+    reference_factor_bytes: u64,
 ) -> anyhow::Result<serde_json::Value> {
     let with = |ordering| BlendOptions {
         ordering,
         sampled_start,
         preconditioner,
+        reference_factor_bytes,
         ..Default::default()
     };
     let interior = InteriorOptions {

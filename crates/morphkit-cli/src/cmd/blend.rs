@@ -128,6 +128,13 @@ pub struct BlendArgs {
     /// where both starts reach the same equilibrium.
     #[arg(long)]
     pub no_sampled_start: bool,
+    /// Factorize every frame's own Hessians instead of preconditioning frames near a
+    /// target's equilibria at α = 0, ¼, ½, ¾, 1 with those equilibria's factors, turned by
+    /// each vertex's rotation (on by default where a probe frame at α = ⅜ converges on them;
+    /// up to five factors of memory per target, 1 GiB in all). A speed knob; the frames agree
+    /// within the tolerance.
+    #[arg(long)]
+    pub no_reference_factors: bool,
     /// Preconditioner of the Newton steps' inner CG: `cholesky` (a sparse factor), `aggregation`
     /// (a two-level cycle on vertex aggregates, no fine factor: for large volumetric systems,
     /// `--interior`), or `auto` (aggregation where the factor would cost more than 10⁴
@@ -403,6 +410,11 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         refactor_every: a.refactor_every,
         keep_factor_cg: a.keep_factor_cg,
         sampled_start: !a.no_sampled_start,
+        reference_factor_bytes: if a.no_reference_factors {
+            0
+        } else {
+            BlendOptions::default().reference_factor_bytes
+        },
         preconditioner: a.preconditioner,
         factor_precision: if a.factor_precision == "double" {
             Precision::Double

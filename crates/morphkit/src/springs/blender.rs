@@ -3,10 +3,11 @@
 //! or many in parallel.
 
 use super::constraints::{stretched_vertices, thin_bands, Components, Constraints};
-use super::newton::{projected_newton, trust_region, Problem, Workspace};
+use super::newton::{projected_newton, reference_at, trust_region, Problem, Workspace};
 use super::options::{
     check_options, BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary,
 };
+use super::reference::{Reference, References, GRID, PROBE};
 use super::rotation_predictor::RotationPredictor;
 use super::sampled_start::{shifted, Sampler, StartSamples};
 use super::system::{expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem};
@@ -85,6 +86,8 @@ pub(super) struct Rig {
     pub(super) samples: StartSamples,
     /// The aggregation cycle's pattern, when it preconditions instead of the factor.
     aggregation: Option<Arc<AggregationLevels>>,
+    /// Reference factors of frames near a grid weight of one target.
+    pub(super) references: References,
     summary: RigSummary,
 }
 
@@ -240,6 +243,10 @@ impl PhysicalBlend {
         } else {
             None
         };
+        if aggregation.is_none() && o.linear_solver == LinearSolver::TrustRegion {
+            summary.reference_targets =
+                References::targets(&chol, shapes.len() - 1, o.reference_factor_bytes);
+        }
         let mut ws = Workspace::new(chol, BlockHessian::zeros(block_pattern), nnz);
         if let Some(levels) = &aggregation {
             ws.aggregation = Some(AggregationPreconditioner::new(levels.clone())?);
@@ -256,6 +263,7 @@ impl PhysicalBlend {
                 rotation,
                 is_fixed,
                 samples: StartSamples::new(shapes.len() - 1),
+                references: References::new(summary.reference_targets),
                 aggregation,
                 summary,
             }),
@@ -452,11 +460,61 @@ impl FrameSolver<'_> {
             Some(p) => Start::From(p),
             None => Start::Canonical,
         };
-        self.rig.solve(self.ws, &c, targets, from)
+        let factor = match from {
+            Start::Canonical if targets.is_empty() => Factor::Reference,
+            _ => Factor::Fresh,
+        };
+        self.rig.solve(self.ws, &c, targets, from, factor)
     }
 }
 
+/// Which factor a solve's inner iterations start with.
+pub(super) enum Factor<'a> {
+    /// Its own factorizations.
+    Fresh,
+    /// The [reference](super::reference) nearest to its weights, when there is one and
+    /// its target passed the probe.
+    Reference,
+    /// The nearest reference without the probe (the probe itself).
+    Probe,
+    /// Its own factorizations, and the reference at its equilibrium written here.
+    Produce(&'a mut Option<Reference>),
+}
+
 impl Rig {
+    /// The reference nearest to coefficients `c` (see [`reference`](super::reference)),
+    /// computed on first need: the samples' from their sampled-start solves, the ends' from
+    /// a solve at the shape itself.
+    fn reference(&self, ws: &mut Workspace, c: &[f64], probe: bool) -> Option<Arc<Reference>> {
+        let (s, g) = References::nearest(c)?;
+        let cell = self.references.cell(s, g)?;
+        if probe && !self.references_fit(ws, s) {
+            return None;
+        }
+        if (1..=3).contains(&g) && self.options.sampled_start {
+            // The sample's solve sets the cell.
+            self.samples.field(s, g - 1, &mut Sampler { rig: self, ws });
+            return cell.get().cloned().flatten();
+        }
+        cell.get_or_init(|| {
+            let c = self.sample_coefficients(s, GRID[g]);
+            let mut out = None;
+            let r = self.solve(ws, &c, &[], Start::Plain, Factor::Produce(&mut out));
+            r.ok().and(out).map(Arc::new)
+        })
+        .clone()
+    }
+
+    /// The probe of target `s`: a solve at $a = ⅜$, ⅛ from the ½ reference, which passes
+    /// when it converges on the reference alone (no factorization of its own).
+    fn references_fit(&self, ws: &mut Workspace, s: usize) -> bool {
+        *self.references.fit[s - 1].get_or_init(|| {
+            let c = self.sample_coefficients(s, PROBE);
+            let r = self.solve(ws, &c, &[], Start::Canonical, Factor::Probe);
+            r.is_ok_and(|r| r.stats.converged && r.stats.factorizations == 0)
+        })
+    }
+
     fn check_targets(&self, targets: &[PointTarget]) -> Result<(), BlendError> {
         let n = self.shapes.num_vertices();
         for t in targets {
@@ -492,6 +550,7 @@ impl Rig {
         c: &[f64],
         targets: &[PointTarget],
         from: Start<'_>,
+        factor: Factor<'_>,
     ) -> Result<BlendResult, BlendError> {
         let start = Instant::now();
         self.check_targets(targets)?;
@@ -560,10 +619,25 @@ impl Rig {
             options: &self.options,
             tolerance: self.tolerance,
         };
+        let reference = match factor {
+            _ if self.options.linear_solver != LinearSolver::TrustRegion => None,
+            Factor::Reference => self.reference(ws, c, true),
+            Factor::Probe => self.reference(ws, c, false),
+            _ => None,
+        };
+        stats.reference_factor = reference.is_some();
         let g = match self.options.linear_solver {
-            LinearSolver::TrustRegion => trust_region(&prob, ws, &mut x, &mut stats)?,
+            LinearSolver::TrustRegion => {
+                let probe = matches!(factor, Factor::Probe);
+                trust_region(&prob, ws, &mut x, &mut stats, reference.as_deref(), probe)?
+            }
             LinearSolver::Direct => projected_newton(&prob, ws, &mut x, &mut stats)?,
         };
+        if let Factor::Produce(out) = factor {
+            if stats.converged {
+                *out = reference_at(&prob, ws, &x)?;
+            }
+        }
         if !stats.converged {
             stats.unconverged_vertices = prob.failed_vertices(&g);
         }

@@ -47,7 +47,8 @@
 //!   gradient: the solve takes zero iterations and returns shape $s$ (within round-off).
 //! - **A frame is a function of its weights alone.** No solve starts from, or reuses numbers of,
 //!   an earlier frame (the symbolic analysis and buffers are reused, never values; the sampled
-//!   correction's samples are solved the same way whichever frame first needs them), so frame
+//!   correction's samples and the [reference factors](reference) that precondition frames
+//!   near them are computed the same way whichever frame first needs them), so frame
 //!   order, scrubbing back and forth, threads ([`PhysicalBlend::solve_many`]) and machine load
 //!   do not change a bit of the result (buffers are 64-byte aligned, METIS orderings are
 //!   computed one at a time; the tests compare frames for equality). `--alpha a` equals the matching frame of `--frames`.
@@ -86,6 +87,7 @@ pub mod metrics;
 mod newton;
 mod options;
 mod predictor;
+pub mod reference;
 mod rotation_predictor;
 pub mod sampled_start;
 mod spring_set;

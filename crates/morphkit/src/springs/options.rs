@@ -99,6 +99,15 @@ pub struct BlendOptions {
     /// 917 → 563 ms, horse ↔ horse-05 1039 → 759 ms, ICT jawOpen 5055 → 4443 ms, armadillo
     /// 1403 → 1313 ms. A count, never a time, so results do not depend on the machine's load.
     pub keep_factor_cg: usize,
+    /// Memory for [reference factors](super::reference), in bytes (`0` turns them off). A
+    /// frame with one target's weight $0 < a < 1$ preconditions with the factor at the
+    /// nearest of that target's equilibria at $a \in \{0, ¼, ½, ¾, 1\}$, turned by each
+    /// vertex's rotation, instead of factorizing on its own, when that target passed a probe
+    /// solve at $a = ⅜$. Targets get references in their order while five factors each (the
+    /// base's shared) fit this budget; a count of bytes from the symbolic analysis, so which
+    /// frames use them depends on the rig alone. Only with the trust region and the factor
+    /// (not the aggregation cycle). Default 1 GiB.
+    pub reference_factor_bytes: u64,
     /// Largest predicted memory of one solver, in bytes; a larger problem is refused before
     /// anything big is allocated, with the estimate in the error. Default 8 GiB.
     pub max_memory_bytes: u64,
@@ -257,6 +266,7 @@ impl Default for BlendOptions {
             factor_precision: Precision::Single,
             refactor_every: 1,
             keep_factor_cg: 8,
+            reference_factor_bytes: 1 << 30,
             max_memory_bytes: 8 << 30,
         }
     }
@@ -286,6 +296,9 @@ pub struct FrameStats {
     /// When not converged: vertices whose residual force exceeds the tolerance, largest
     /// first (at most 10 000).
     pub unconverged_vertices: Vec<u32>,
+    /// Whether the inner iterations started on a shared
+    /// [reference factor](super::reference) (and, with no factorizations, ended on it).
+    pub reference_factor: bool,
     /// Wall time in seconds (reported only; no decision depends on it).
     pub seconds: f64,
 }
@@ -337,4 +350,7 @@ pub struct RigSummary {
     pub ordering: FillOrdering,
     /// Predicted bytes of one solver workspace (the memory check).
     pub predicted_bytes: u64,
+    /// Targets whose frames may precondition with
+    /// [reference factors](BlendOptions::reference_factor_bytes) (the first this many).
+    pub reference_targets: usize,
 }

@@ -34,7 +34,7 @@
 //! two minima (measured before thin bands followed the predictor,
 //! [`BlendOptions::thin_band_rings`](super::BlendOptions::thin_band_rings); see the README).
 
-use super::blender::{FrameSolver, Rig, Start};
+use super::blender::{Factor, FrameSolver, Rig, Start};
 use super::newton::Workspace;
 use super::{PhysicalBlend, Weights};
 use crate::mesh::Point;
@@ -239,14 +239,24 @@ impl SampleSolver for Sampler<'_> {
         let a = SAMPLES[k];
         let c = self.rig.sample_coefficients(s, a);
         let p = self.rig.predicted(&c);
+        let mut reference = None;
+        let cell = self.rig.references.cell(s, k + 1);
+        let produce = match cell {
+            Some(_) => Factor::Produce(&mut reference),
+            None => Factor::Fresh,
+        };
         let r = match half {
-            None => self.rig.solve(self.ws, &c, &[], Start::Plain),
+            None => self.rig.solve(self.ws, &c, &[], Start::Plain, produce),
             Some(d) => {
                 let from = shifted(p.clone(), d, half_weight(a));
-                self.rig.solve(self.ws, &c, &[], Start::From(&from))
+                self.rig
+                    .solve(self.ws, &c, &[], Start::From(&from), produce)
             }
+        };
+        if let Some(cell) = cell {
+            let _ = cell.set(reference.map(Arc::new));
         }
-        .ok()?;
+        let r = r.ok()?;
         r.stats.converged.then(|| {
             r.positions
                 .iter()

@@ -25,6 +25,8 @@ pub(crate) struct FreeSystem {
     /// Diagonal slot of each free coordinate.
     pub diag_slots: Vec<u32>,
     pub pattern: Arc<SymmetricPattern>,
+    /// The vertex-level pattern the scalar one was built from.
+    pub block_pattern: Arc<BlockPattern>,
 }
 
 impl FreeSystem {
@@ -85,6 +87,7 @@ impl FreeSystem {
             off_dest,
             diag_slots,
             pattern: Arc::new(pattern),
+            block_pattern,
         })
     }
 
