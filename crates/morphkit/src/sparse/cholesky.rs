@@ -340,24 +340,19 @@ impl Cholesky {
     pub fn solve_one(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
         self.check_rhs(rhs, 1)?;
         let stack = MemStack::new(&mut self.solve_scratch);
-        match self.precision {
-            Precision::Single => solve_stored(
-                &self.symbolic,
-                self.l_single.as_slice(),
-                self.rhs_single.as_mut_slice(),
-                rhs,
-                1,
-                stack,
-            ),
-            Precision::Double => solve_stored(
-                &self.symbolic,
-                self.l_values.as_slice(),
-                self.rhs_scratch.as_mut_slice(),
-                rhs,
-                1,
-                stack,
-            ),
-        }
+        let (single, double) = (self.l_single.as_slice(), self.l_values.as_slice());
+        let work = (
+            self.rhs_single.as_mut_slice(),
+            self.rhs_scratch.as_mut_slice(),
+        );
+        solve_one_stored(
+            &self.symbolic,
+            self.precision,
+            (single, double),
+            work,
+            rhs,
+            stack,
+        );
         Ok(())
     }
 
@@ -397,53 +392,34 @@ impl Cholesky {
                 "the frozen factor belongs to another symbolic analysis".into(),
             ));
         }
-        let n = self.pattern.n();
-        if rhs.len() != n {
-            return Err(SolveError::Dimension {
-                what: "right-hand side",
-                expected: n,
-                found: rhs.len(),
-            });
-        }
-        if rhs.iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::NonFinite {
-                what: "right-hand side",
-            });
-        }
+        self.check_values(rhs, 1)?;
         if f.precision != self.precision {
             return Err(SolveError::Backend(
                 "the frozen factor's precision differs from the solver's".into(),
             ));
         }
         let stack = MemStack::new(&mut self.solve_scratch);
-        match f.precision {
-            Precision::Single => solve_stored(
-                &f.symbolic,
-                f.l_single.as_slice(),
-                self.rhs_single.as_mut_slice(),
-                rhs,
-                1,
-                stack,
-            ),
-            Precision::Double => solve_stored(
-                &f.symbolic,
-                f.l_values.as_slice(),
-                self.rhs_scratch.as_mut_slice(),
-                rhs,
-                1,
-                stack,
-            ),
-        }
+        let factor = (f.l_single.as_slice(), f.l_values.as_slice());
+        let work = (
+            self.rhs_single.as_mut_slice(),
+            self.rhs_scratch.as_mut_slice(),
+        );
+        solve_one_stored(&f.symbolic, f.precision, factor, work, rhs, stack);
         Ok(())
     }
 
     fn check_rhs(&self, rhs: &[f64], ncols: usize) -> Result<(), SolveError> {
-        let n = self.pattern.n();
         if !self.factored {
             return Err(SolveError::Backend(
                 "solve called before a successful factorization".into(),
             ));
         }
+        self.check_values(rhs, ncols)
+    }
+
+    /// `ncols` right-hand sides of this solver's size, all finite.
+    fn check_values(&self, rhs: &[f64], ncols: usize) -> Result<(), SolveError> {
+        let n = self.pattern.n();
         if rhs.len() != n * ncols {
             return Err(SolveError::Dimension {
                 what: "right-hand side",
@@ -622,6 +598,22 @@ fn factor_stored<T: Stored>(
 
 /// Solves with the factor values `l` for the `ncols` right-hand sides in `rhs`, through the
 /// (aligned) buffer `work` of the factor's arithmetic.
+/// One right-hand side through the stored factor of `precision` (`factor`: its f32 and f64
+/// values, one of them empty) with the work vector of the same precision.
+fn solve_one_stored(
+    symbolic: &SymbolicCholesky<usize>,
+    precision: Precision,
+    factor: (&[f32], &[f64]),
+    work: (&mut [f32], &mut [f64]),
+    rhs: &mut [f64],
+    stack: &mut MemStack,
+) {
+    match precision {
+        Precision::Single => solve_stored(symbolic, factor.0, work.0, rhs, 1, stack),
+        Precision::Double => solve_stored(symbolic, factor.1, work.1, rhs, 1, stack),
+    }
+}
+
 fn solve_stored<T: Stored>(
     symbolic: &SymbolicCholesky<usize>,
     l: &[T],

@@ -7,7 +7,7 @@ use super::newton::{projected_newton, reference_at, trust_region, Problem, Works
 use super::options::{
     check_options, BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary,
 };
-use super::reference::{Reference, References, GRID, PROBE};
+use super::reference::{Factor, References};
 use super::rotation_predictor::RotationPredictor;
 use super::sampled_start::{shifted, Sampler, StartSamples};
 use super::system::{expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem};
@@ -468,53 +468,7 @@ impl FrameSolver<'_> {
     }
 }
 
-/// Which factor a solve's inner iterations start with.
-pub(super) enum Factor<'a> {
-    /// Its own factorizations.
-    Fresh,
-    /// The [reference](super::reference) nearest to its weights, when there is one and
-    /// its target passed the probe.
-    Reference,
-    /// The nearest reference without the probe (the probe itself).
-    Probe,
-    /// Its own factorizations, and the reference at its equilibrium written here.
-    Produce(&'a mut Option<Reference>),
-}
-
 impl Rig {
-    /// The reference nearest to coefficients `c` (see [`reference`](super::reference)),
-    /// computed on first need: the samples' from their sampled-start solves, the ends' from
-    /// a solve at the shape itself.
-    fn reference(&self, ws: &mut Workspace, c: &[f64], probe: bool) -> Option<Arc<Reference>> {
-        let (s, g) = References::nearest(c)?;
-        let cell = self.references.cell(s, g)?;
-        if probe && !self.references_fit(ws, s) {
-            return None;
-        }
-        if (1..=3).contains(&g) && self.options.sampled_start {
-            // The sample's solve sets the cell.
-            self.samples.field(s, g - 1, &mut Sampler { rig: self, ws });
-            return cell.get().cloned().flatten();
-        }
-        cell.get_or_init(|| {
-            let c = self.sample_coefficients(s, GRID[g]);
-            let mut out = None;
-            let r = self.solve(ws, &c, &[], Start::Plain, Factor::Produce(&mut out));
-            r.ok().and(out).map(Arc::new)
-        })
-        .clone()
-    }
-
-    /// The probe of target `s`: a solve at $a = ⅜$, ⅛ from the ½ reference, which passes
-    /// when it converges on the reference alone (no factorization of its own).
-    fn references_fit(&self, ws: &mut Workspace, s: usize) -> bool {
-        *self.references.fit[s - 1].get_or_init(|| {
-            let c = self.sample_coefficients(s, PROBE);
-            let r = self.solve(ws, &c, &[], Start::Canonical, Factor::Probe);
-            r.is_ok_and(|r| r.stats.converged && r.stats.factorizations == 0)
-        })
-    }
-
     fn check_targets(&self, targets: &[PointTarget]) -> Result<(), BlendError> {
         let n = self.shapes.num_vertices();
         for t in targets {

@@ -34,8 +34,9 @@
 //! two minima (measured before thin bands followed the predictor,
 //! [`BlendOptions::thin_band_rings`](super::BlendOptions::thin_band_rings); see the README).
 
-use super::blender::{Factor, FrameSolver, Rig, Start};
+use super::blender::{FrameSolver, Rig, Start};
 use super::newton::Workspace;
+use super::reference::Factor;
 use super::{PhysicalBlend, Weights};
 use crate::mesh::Point;
 use std::sync::atomic::{AtomicUsize, Ordering};
