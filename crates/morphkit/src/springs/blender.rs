@@ -7,6 +7,7 @@ use super::newton::{projected_newton, reference_at, trust_region, Problem, Works
 use super::options::{
     check_options, BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary,
 };
+use super::predictor::BlendPredictor;
 use super::reference::{Factor, References};
 use super::rotation_predictor::RotationPredictor;
 use super::sampled_start::{shifted, Sampler, StartSamples};
@@ -27,45 +28,6 @@ use std::time::Instant;
 pub struct PhysicalBlend {
     pub(super) rig: Arc<Rig>,
     pub(super) ws: Workspace,
-}
-
-/// The predictor $P(w)$ of a [`PhysicalBlend`] on its own (see [`PhysicalBlend::predictor`]):
-/// cheap to clone, `Send + Sync`, and usable while the blend it came from is solving on
-/// another thread.
-#[derive(Clone)]
-pub struct BlendPredictor {
-    rig: Arc<Rig>,
-}
-
-impl std::fmt::Debug for BlendPredictor {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("BlendPredictor")
-            .field("vertices", &self.rig.summary.vertices)
-            .finish()
-    }
-}
-
-impl BlendPredictor {
-    /// Vertices of a prediction.
-    pub fn num_vertices(&self) -> usize {
-        self.rig.shapes.num_vertices()
-    }
-    /// Shapes of the blend (base and targets).
-    pub fn num_shapes(&self) -> usize {
-        self.rig.shapes.len()
-    }
-    /// The predictor $P(w)$, in world coordinates (`#V`): the rotation-aware interpolation of
-    /// the shapes (the linear blend with [`Predictor::Linear`]), with fixed and kinematic
-    /// vertices at their linear blend; a solve starts from it plus the
-    /// [sampled correction](super::sampled_start), which needs equilibria and so is not part
-    /// of this preview. It
-    /// equals each shape exactly at its one-hot weights and costs one prefactored solve, so it
-    /// can follow a slider while the equilibrium is computed (a preview, not the equilibrium).
-    pub fn predict(&self, weights: &Weights) -> Result<Vec<crate::mesh::Point>, BlendError> {
-        Ok(self
-            .rig
-            .predicted(&weights.coefficients(self.rig.shapes.len())?))
-    }
 }
 
 /// Everything that does not change between solves (shared by all threads).

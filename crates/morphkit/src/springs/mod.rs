@@ -98,7 +98,7 @@ pub mod tether;
 pub mod weights;
 
 pub(crate) use blender::report_lost;
-pub use blender::{blend, BlendPredictor, FrameSolver, PhysicalBlend};
+pub use blender::{blend, FrameSolver, PhysicalBlend};
 pub use constraints::{
     stretched_vertices, thin_bands, AlignedComponent, Components, Constraints, FixedVertices, Gauge,
 };
@@ -112,6 +112,7 @@ pub use options::{
     BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, Precision, Preconditioner,
     Predictor, RigSummary, AGGREGATION_FLOPS_PER_ENTRY,
 };
+pub use predictor::BlendPredictor;
 pub use spring_set::{Spring, SpringKind, SpringOptions, SpringSet, StiffnessRule};
 pub use terms::{HingeOptions, PointTarget};
 pub use weights::Weights;

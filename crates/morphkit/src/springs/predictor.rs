@@ -18,9 +18,10 @@
 
 use super::blender::Rig;
 use super::gauge::rotate_into;
-use super::Constraints;
+use super::{BlendError, Constraints, Weights};
 use crate::geom::kabsch;
 use crate::mesh::{Point, ShapeSet};
+use std::sync::Arc;
 
 /// The linear blend $\sum_s c_s x^s$.
 pub(crate) fn linear(shapes: &ShapeSet, c: &[f64]) -> Vec<Point> {
@@ -117,5 +118,44 @@ impl Rig {
     pub(super) fn predicted(&self, c: &[f64]) -> Vec<Point> {
         let lin = linear(&self.shapes, c);
         self.world_prediction(&lin, self.rotation_prediction(c, &lin).as_deref())
+    }
+}
+
+/// The predictor $P(w)$ of a [`PhysicalBlend`](super::PhysicalBlend) on its own (see [`PhysicalBlend::predictor`](super::PhysicalBlend::predictor)):
+/// cheap to clone, `Send + Sync`, and usable while the blend it came from is solving on
+/// another thread.
+#[derive(Clone)]
+pub struct BlendPredictor {
+    pub(super) rig: Arc<Rig>,
+}
+
+impl std::fmt::Debug for BlendPredictor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BlendPredictor")
+            .field("vertices", &self.rig.shapes.num_vertices())
+            .finish()
+    }
+}
+
+impl BlendPredictor {
+    /// Vertices of a prediction.
+    pub fn num_vertices(&self) -> usize {
+        self.rig.shapes.num_vertices()
+    }
+    /// Shapes of the blend (base and targets).
+    pub fn num_shapes(&self) -> usize {
+        self.rig.shapes.len()
+    }
+    /// The predictor $P(w)$, in world coordinates (`#V`): the rotation-aware interpolation of
+    /// the shapes (the linear blend with [`Predictor::Linear`](super::Predictor::Linear)), with fixed and kinematic
+    /// vertices at their linear blend; a solve starts from it plus the
+    /// [sampled correction](super::sampled_start), which needs equilibria and so is not part
+    /// of this preview. It
+    /// equals each shape exactly at its one-hot weights and costs one prefactored solve, so it
+    /// can follow a slider while the equilibrium is computed (a preview, not the equilibrium).
+    pub fn predict(&self, weights: &Weights) -> Result<Vec<crate::mesh::Point>, BlendError> {
+        Ok(self
+            .rig
+            .predicted(&weights.coefficients(self.rig.shapes.len())?))
     }
 }
