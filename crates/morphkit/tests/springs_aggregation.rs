@@ -7,7 +7,7 @@ mod common;
 
 use common::max_dist;
 use morphkit::mesh::enclosed_volume as volume;
-use morphkit::mesh::{bbox_diagonal, generate, ShapeSet};
+use morphkit::mesh::{bbox_diagonal, ShapeSet};
 use morphkit::springs::{
     AnchorOptions, AnchorPlacement, BlendOptions, InteriorMode, InteriorOptions, PhysicalBlend,
     Preconditioner, VolumetricBlend, Weights,
@@ -15,16 +15,7 @@ use morphkit::springs::{
 
 /// A closed tube bent by 120°, about 1.5k vertices with its lattice interior.
 fn bent_tube() -> ShapeSet {
-    let m = generate::tube(0.5, 4.0, 20, 48, true);
-    let bent = generate::bend(&m.positions, 0.0, 4.0, 120f64.to_radians());
-    ShapeSet::new(
-        m.clone(),
-        vec![
-            ("straight".into(), m.positions.clone()),
-            ("bent".into(), bent),
-        ],
-    )
-    .unwrap()
+    common::bent_tube(20, 48, 120.0)
 }
 
 fn blend(s: &ShapeSet, preconditioner: Preconditioner, anchor: bool) -> VolumetricBlend {

@@ -16,16 +16,7 @@ use morphkit::springs::{
 };
 
 fn bent_tube(around: usize, along: usize) -> ShapeSet {
-    let m = generate::tube(0.5, 4.0, around, along, true);
-    let bent = generate::bend(&m.positions, 0.0, 4.0, 90f64.to_radians());
-    ShapeSet::new(
-        m.clone(),
-        vec![
-            ("straight".into(), m.positions.clone()),
-            ("bent".into(), bent),
-        ],
-    )
-    .unwrap()
+    common::bent_tube(around, along, 90.0)
 }
 
 fn options(references: bool) -> BlendOptions {

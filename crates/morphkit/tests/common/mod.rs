@@ -102,6 +102,15 @@ pub fn bent_bar() -> morphkit::mesh::ShapeSet {
     two_shapes(&bar, "straight", ("bent", bent))
 }
 
+/// A closed tube (radius 0.5, length 4, `around` × `along` vertices) and the same tube bent
+/// by `degrees` over its whole length.
+pub fn bent_tube(around: usize, along: usize, degrees: f64) -> morphkit::mesh::ShapeSet {
+    use morphkit::mesh::generate;
+    let m = generate::tube(0.5, 4.0, around, along, true);
+    let bent = generate::bend(&m.positions, 0.0, 4.0, degrees.to_radians());
+    two_shapes(&m, "straight", ("bent", bent))
+}
+
 /// `mesh` as the base shape named `base`, and one target on its connectivity.
 pub fn two_shapes(
     mesh: &morphkit::mesh::TriMesh,
