@@ -11,7 +11,9 @@
 //!
 //! $$M^{-1} = Q\, H_g^{-1}\, Q^\top, \qquad Q = \operatorname{diag}(Q_v),$$
 //!
-//! where $H_g$ is the projected Hessian at the sample's equilibrium $y$ and $Q_v$ the
+//! where $H_g$ is the projected Hessian at $y$, the iterate of the last factorization of that
+//! grid weight's solve (for the samples, one Newton step or less from their equilibrium; for
+//! the ends, the shape itself), and $Q_v$ the
 //! rotation of the polar decomposition of $\sum_{w \sim v} (x_w - x_v)(y_w - y_v)^\top$ over
 //! the vertices $w$ coupled to $v$ in the Hessian (identity where $v$ has fixed coordinates).
 //! A spring's Hessian block $k\, d d^\top$ turns with its direction $d$, and in a bent body
