@@ -216,7 +216,7 @@ fn bent_spot() -> Option<ShapeSet> {
 /// Spot (closed, 829 vertices) with its front half bent 90°, lattice density 0.5 (only 9
 /// interior points, tied to most surface vertices): measured 2.8e-3 against 6.8e-3 for surface
 /// springs and 7.9e-2 for the linear blend. At density 1 (144 points) the gain is small
-/// (6.0e-3), see the README.
+/// (6.0e-3), see docs/choices.md (internal springs).
 #[test]
 fn internal_springs_keep_volume_of_a_bent_spot() {
     let Some(s) = bent_spot() else {

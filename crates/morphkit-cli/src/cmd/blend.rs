@@ -88,7 +88,7 @@ pub struct BlendArgs {
     #[arg(long, default_value_t = 1.0)]
     pub k0: f64,
     /// Add Ma et al.'s bending springs between vertices two edges apart (off by default: the
-    /// signed hinge is the bending term; see the README's "Choices").
+    /// signed hinge is the bending term; see docs/choices.md).
     #[arg(long)]
     pub bending_springs: bool,
     /// Without bending springs: the default now, accepted for older scripts.

@@ -20,7 +20,7 @@
 //! over every frame of the 36-step sequences of the ten horse poses and ten ICT expressions,
 //! leaving them out gives fewer creases (horse-05: 40 instead of 94 over the sequence, linear
 //! 316), no fold anywhere, ICT jawOpen's gums move at most 4.1× the linear blend's step where
-//! they snapped by 25×, and the sequences solve 1.5× faster (README, "Choices").
+//! they snapped by 25×, and the sequences solve 1.5× faster (docs/choices.md).
 //!
 //! # The canonical equilibrium
 //!

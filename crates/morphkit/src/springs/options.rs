@@ -55,7 +55,7 @@ pub struct BlendOptions {
     /// move: over 36-step sequences, ICT mouthSmile_L's frames by at most 1e-4 of the
     /// diagonal, horse-05's freely turning lower legs by up to 2 % towards $P$ (0.2 % on
     /// average over the vertices). Measured on all twenty 36-step
-    /// real sequences (see the README): largest step over the linear blend's 6.81 → 1.71
+    /// real sequences (docs/performance.md): largest step over the linear blend's 6.81 → 1.71
     /// (horse-04), 4.10 → 2.98 (ICT jawOpen), no fold; 3e-6 still joins them (at most 3.50),
     /// 1e-4 folds a triangle on two horse poses.
     pub tether: f64,

@@ -38,7 +38,7 @@ pub struct SpringOptions {
     /// the cosine of the fold. With the hinge on, the 2-ring springs cost two thirds of the
     /// springs and a third of the factor and bought no quality on the real rigs: without
     /// them, the horse and ICT sequences have fewer creases, no more folds, and ICT jawOpen's
-    /// gums no longer snap (README, "Choices").
+    /// gums no longer snap (docs/choices.md).
     pub bending: bool,
     /// Base stiffness $k_0$. Default `1.0` (only ratios matter for the equilibrium).
     pub k0: f64,
