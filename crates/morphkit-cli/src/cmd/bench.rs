@@ -5,6 +5,10 @@
 //! 8.5k and 18.6k vertices, on generated bent tubes and, when the data directory is given, on
 //! real meshes: the horse (8.4k vertices, reference ↔ pose 5) and the armadillo (14.6k, bent
 //! procedurally: it has no poses).
+//!
+//! Every run opens with the [machine check](super::bench_machine): the speed of a fixed
+//! single-precision factorization and solve, so that rows measured on different days can be
+//! compared.
 
 use crate::outputs::{Kind, Plan};
 use morphkit::mesh::{generate, ShapeSet};
@@ -309,6 +313,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         .output_opt("--report", args.report.as_ref(), Kind::Json)
         .check()?;
     let mut report = json!({ "threads": args.threads });
+    report["machine"] = super::bench_machine::machine_check()?;
     let reference_factor_bytes = if args.no_reference_factors {
         0
     } else {
