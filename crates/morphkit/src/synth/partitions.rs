@@ -137,6 +137,19 @@ pub fn partitions(
     Partitions::new(flexibility, &Topology::new(num_vertices, triangles), gamma)
 }
 
+/// Test helper: the partitions of `mesh` whose triangles have the flexibilities `values`, at
+/// the default threshold [`GAMMA`].
+#[cfg(test)]
+pub(crate) fn partitions_of(mesh: &crate::mesh::TriMesh, values: Vec<f64>) -> Partitions {
+    partitions(
+        &Flexibility { values },
+        mesh.num_vertices(),
+        &mesh.triangles,
+        GAMMA,
+    )
+    .expect("valid test flexibilities")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -149,13 +162,7 @@ mod tests {
         let values = (0..20)
             .map(|t| if (8..12).contains(&t) { 0.5 } else { 0.01 })
             .collect();
-        let p = partitions(
-            &Flexibility { values },
-            g.num_vertices(),
-            &g.triangles,
-            GAMMA,
-        )
-        .unwrap();
+        let p = partitions_of(&g, values);
         assert_eq!(p.num_stiff(), 2);
         assert_eq!(p.num_partitions(), 2 + 4);
         assert_eq!(p.label(0), 0);

@@ -181,7 +181,8 @@ pub fn edit_pose(
 mod tests {
     use super::*;
     use crate::mesh::{generate, norm, sub, Topology};
-    use crate::synth::{partitions, Flexibility, GAMMA, KAPPA};
+    use crate::synth::partitions::partitions_of;
+    use crate::synth::KAPPA;
     use crate::transfer::SolverOptions;
 
     #[test]
@@ -203,13 +204,7 @@ mod tests {
                 }
             })
             .collect();
-        let p = partitions(
-            &Flexibility { values },
-            bar.num_vertices(),
-            &bar.triangles,
-            GAMMA,
-        )
-        .unwrap();
+        let p = partitions_of(&bar, values);
         assert_eq!(p.num_stiff(), 2);
         let topo = Topology::new(bar.num_vertices(), &bar.triangles);
         let ws = WeightSolver::new(&topo, &p.stiff_mask(), KAPPA).unwrap();

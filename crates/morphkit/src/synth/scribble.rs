@@ -163,7 +163,7 @@ pub fn refine_scribble(
 mod tests {
     use super::*;
     use crate::mesh::generate;
-    use crate::synth::{partitions, Flexibility, GAMMA};
+    use crate::synth::partitions::partitions_of;
 
     #[test]
     fn more_than_half_selects_a_partition() {
@@ -171,13 +171,7 @@ mod tests {
         let values = (0..20)
             .map(|t| if (8..12).contains(&t) { 0.5 } else { 0.01 })
             .collect();
-        let p = partitions(
-            &Flexibility { values },
-            g.num_vertices(),
-            &g.triangles,
-            GAMMA,
-        )
-        .unwrap();
+        let p = partitions_of(&g, values);
         // 5 of the left part's 8 and 4 of the right part's 8, plus a flexible one.
         let s = Scribble::Triangles(vec![0, 1, 2, 3, 4, 9, 12, 13, 14, 15]);
         let sel = refine_scribble(&s, &p, g.num_vertices(), &g.triangles).unwrap();

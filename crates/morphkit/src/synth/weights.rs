@@ -178,7 +178,8 @@ pub fn blend_weights(
 mod tests {
     use super::*;
     use crate::mesh::generate;
-    use crate::synth::{partitions, refine_scribble, Flexibility, Scribble, GAMMA};
+    use crate::synth::partitions::partitions_of;
+    use crate::synth::{refine_scribble, Scribble};
 
     #[test]
     fn exact_on_stiff_and_strictly_between_elsewhere() {
@@ -194,13 +195,7 @@ mod tests {
         let values = (0..g.num_triangles())
             .map(|t| if (4.0..8.0).contains(&x(t)) { 1.0 } else { 0.0 })
             .collect();
-        let p = partitions(
-            &Flexibility { values },
-            g.num_vertices(),
-            &g.triangles,
-            GAMMA,
-        )
-        .unwrap();
+        let p = partitions_of(&g, values);
         assert_eq!(p.num_stiff(), 2);
         let left: Vec<u32> = (0..g.num_triangles() as u32)
             .filter(|&t| x(t as usize) < 4.0)
