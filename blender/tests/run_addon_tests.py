@@ -365,6 +365,19 @@ err = max(
 ) / diag(DT)
 check(err < 1e-6, f"rig keys differ by {err}")
 results["rig_error"] = err
+# The panel's refine and local-stretch options reach the module as its keyword arguments.
+scene.morphkit_refine = scene.morphkit_local_stretch = True
+check(bpy.ops.morphkit.transfer() == {"FINISHED"}, "transfer with refine and local stretch failed")
+keys = [k for k in dog.data.shape_keys.key_blocks if k.name.startswith(transfer_ops.FRAME_PREFIX)]
+corr_r = morphkit.Correspondence.from_markers(CS, CFb, DT, DFb, pairs, refine=True)
+ref_r = morphkit.Transfer(
+    CS, CFb, DT, DFb, corr_r, local_stretch=True, area_weighted=True
+).transfer_many(run)
+check(float(np.abs(ref_r - ref).max()) / diag(DT) > 1e-4, "the options changed nothing")
+err = max(float(np.abs(geometry.key_coords(k) - r).max()) for k, r in zip(keys, ref_r)) / diag(DT)
+check(len(keys) == 4 and err < 1e-6, f"refined local-stretch frames differ by {err}")
+results["transfer_local_stretch_error"] = err
+scene.morphkit_refine = scene.morphkit_local_stretch = False
 bpy.data.objects.remove(cat)
 bpy.data.objects.remove(dog)
 

@@ -88,6 +88,8 @@ class Correspondence:
         vt: ArrayLike,
         ft: ArrayLike,
         markers: Union[PathLike, Sequence[Sequence[int]], ArrayLike],
+        *,
+        refine: bool = False,
     ) -> "Correspondence": ...
     @staticmethod
     def identity(v: ArrayLike, f: ArrayLike) -> "Correspondence": ...
@@ -114,6 +116,9 @@ class Transfer:
         *,
         combine: str = "inverse-distance",
         translation: str = "follow",
+        local_stretch: bool = False,
+        area_weighted: bool = False,
+        fold_guard: bool = True,
     ) -> None: ...
     def transfer(self, frame: ArrayLike) -> Vertices: ...
     def transfer_many(self, frames: Union[ArrayLike, Sequence[ArrayLike]]) -> Frames: ...

@@ -10,7 +10,8 @@ use morphkit::mesh::TriMesh;
 use morphkit::transfer::rig::{RigOptions, RigTransfer};
 use morphkit::transfer::{
     correspond, match_confidence, AnimationTransfer, Correspondence, CorrespondenceOptions,
-    GradientCombine, Markers, TransferOptions, TranslationMode,
+    GradientCombine, GradientFrame, Markers, RefineOptions, TransferOptions, TranslationMode,
+    TriangleWeighting,
 };
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;
@@ -59,8 +60,11 @@ impl PyCorrespondence {
     /// Computes the correspondence of source `(VS, FS)` and target `(VT, FT)` from marker
     /// pairs (a sequence of `(source_vertex, target_vertex)`, 0-based, or the path of a
     /// `{"pairs": [[s, t], …]}` JSON file), by least-squares-mesh warps (Wang & Lee Sec. 4.1).
+    /// `refine=True` then refines it by closest points (Sumner & Popović 2004, Sec. 5), as
+    /// `morphkit correspond --refine`.
     #[staticmethod]
-    #[pyo3(signature = (vs, fs, vt, ft, markers))]
+    #[pyo3(signature = (vs, fs, vt, ft, markers, *, refine=false))]
+    #[allow(clippy::too_many_arguments)]
     fn from_markers(
         py: Python<'_>,
         vs: &Bound<'_, PyAny>,
@@ -68,6 +72,7 @@ impl PyCorrespondence {
         vt: &Bound<'_, PyAny>,
         ft: &Bound<'_, PyAny>,
         markers: &Bound<'_, PyAny>,
+        refine: bool,
     ) -> PyResult<Self> {
         let source = from_arrays("source", vs, fs)?;
         let target = from_arrays("target", vt, ft)?;
@@ -78,7 +83,10 @@ impl PyCorrespondence {
                     &source,
                     &target,
                     &markers,
-                    &CorrespondenceOptions::default(),
+                    &CorrespondenceOptions {
+                        refine: refine.then(RefineOptions::default),
+                        ..Default::default()
+                    },
                 )
             })
             .py(Kind::Transfer)?;
@@ -191,6 +199,11 @@ impl PyCorrespondence {
 /// `combine`: `"inverse-distance"` (default, as the CLI), `"mean"` or `"nearest"`, how several
 /// matched source gradients combine. `translation`: `"follow"` (default; the target's marker centroid follows the
 /// source's, scaled by the size ratio) or `"fixed"` (the paper's convention).
+/// `local_stretch=True` transfers each matched gradient as a stretch in the target
+/// triangle's own frame (`transfer --local-stretch`), guarded against creases unless
+/// `fold_guard=False` (`--no-fold-guard`); `area_weighted=True` weights each triangle's
+/// term by its area (`--area-weighted`). With a refined correspondence the three together
+/// are the configuration the README measures best.
 ///
 /// >>> t = morphkit.Transfer(VS, FS, VT, FT, c)
 /// >>> frames_t = t.transfer_many(frames_s)
@@ -232,7 +245,7 @@ fn combine_of(name: &str) -> PyResult<GradientCombine> {
 impl PyTransfer {
     #[new]
     #[pyo3(signature = (vs, fs, vt, ft, correspondence, *, combine="inverse-distance",
-        translation="follow"))]
+        translation="follow", local_stretch=false, area_weighted=false, fold_guard=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -243,7 +256,17 @@ impl PyTransfer {
         correspondence: &PyCorrespondence,
         combine: &str,
         translation: &str,
+        local_stretch: bool,
+        area_weighted: bool,
+        fold_guard: bool,
     ) -> PyResult<Self> {
+        if !fold_guard && !local_stretch {
+            return Err(new_err(
+                Kind::Transfer,
+                "fold_guard=False: the fold guard belongs to local_stretch=True (the plain \
+                 transfer has none to turn off)",
+            ));
+        }
         let combine = combine_of(combine)?;
         let translation = match translation {
             "follow" => TranslationMode::FollowMarkers,
@@ -255,11 +278,20 @@ impl PyTransfer {
                 ))
             }
         };
-        let opts = TransferOptions {
+        let mut opts = TransferOptions {
             combine,
             translation,
             ..TransferOptions::default()
         };
+        if local_stretch {
+            opts.frame = GradientFrame::LocalStretch;
+        }
+        if area_weighted {
+            opts.solver.weighting = TriangleWeighting::Area;
+        }
+        if !fold_guard {
+            opts.fold_guard = None;
+        }
         let corr = &correspondence.inner;
         let (inner, source_vertices, target_vertices) = build(py, [vs, fs, vt, ft], |s, t| {
             AnimationTransfer::new(s, t, corr, &opts)

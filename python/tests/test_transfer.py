@@ -101,6 +101,48 @@ def test_cat_dog_equals_the_cli(tmp_path, cli, cat_dog):
     assert np.abs(ours - theirs[:4]).max() <= 1e-9 * diag(VT)
 
 
+def test_local_stretch_self_transfer_is_exact_and_the_guard_needs_it():
+    V, F = tube()
+    c = morphkit.Correspondence.identity(V, F)
+    frames = np.stack([bend(V, a) for a in (0.4, 1.1)])
+    for guard in (True, False):
+        t = morphkit.Transfer(
+            V, F, V, F, c, translation="fixed", local_stretch=True, area_weighted=True, fold_guard=guard
+        )
+        assert np.abs(t.transfer_many(frames) - frames).max() < 1e-8 * diag(V)
+    with pytest.raises(morphkit.TransferError, match="fold_guard"):
+        morphkit.Transfer(V, F, V, F, c, fold_guard=False)
+
+
+def test_cat_dog_best_configuration_equals_the_cli(tmp_path, cli, cat_dog):
+    """refine, local_stretch and area_weighted reach the library as the CLI's flags do."""
+    d = cat_dog
+    frames_dir = d / "cat-run"
+    VS, FS = morphkit.read(d / "cat-reference.obj")
+    VT, FT = morphkit.read(d / "dog-reference.obj")
+    frames, _, _ = morphkit.read_animation(frames_dir)
+    markers = d / "markers-cat-dog.json"
+    plain_c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, markers)
+    c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, markers, refine=True)
+    assert c.matches != plain_c.matches
+    t = morphkit.Transfer(VS, FS, VT, FT, c, local_stretch=True, area_weighted=True)
+    ours = t.transfer_many(frames[:3])
+    plain = morphkit.Transfer(VS, FS, VT, FT, plain_c).transfer_many(frames[:3])
+    assert np.abs(ours - plain).max() > 1e-4 * diag(VT)
+    out = tmp_path / "dog"
+    cli(
+        "transfer",
+        "--source-ref", d / "cat-reference.obj",
+        "--source", frames_dir,
+        "--target", d / "dog-reference.obj",
+        "--markers", markers,
+        "--refine", "--local-stretch", "--area-weighted",
+        "--out", out,
+    )
+    theirs, _, _ = morphkit.read_animation(out)
+    assert np.abs(ours - theirs[:3]).max() <= 1e-9 * diag(VT)
+
+
 def test_rig_onto_a_rotated_scaled_copy_and_equal_to_the_cli(tmp_path, cli):
     V, F = tube()
     shapes = np.stack([bend(V, 0.6), bend(V, 1.2)])
