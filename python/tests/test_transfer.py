@@ -78,26 +78,34 @@ def cat_dog():
     return d
 
 
-def test_cat_dog_equals_the_cli(tmp_path, cli, cat_dog):
-    d = cat_dog
-    frames_dir = d / "cat-run"
+def cat_dog_inputs(d):
+    """The cat and dog references and the cat's run frames."""
     VS, FS = morphkit.read(d / "cat-reference.obj")
     VT, FT = morphkit.read(d / "dog-reference.obj")
-    frames, _, _ = morphkit.read_animation(frames_dir)
-    c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, d / "markers-cat-dog.json")
-    assert len(c.marker_residuals) == 41
-    t = morphkit.Transfer(VS, FS, VT, FT, c)
-    ours = t.transfer_many(frames[:4])
-    out = tmp_path / "dog"
+    frames, _, _ = morphkit.read_animation(d / "cat-run")
+    return VS, FS, VT, FT, frames
+
+
+def cli_transfer(cli, d, out, *flags):
+    """`morphkit transfer` of the cat's run onto the dog with `flags`: its frames."""
     cli(
         "transfer",
         "--source-ref", d / "cat-reference.obj",
-        "--source", frames_dir,
+        "--source", d / "cat-run",
         "--target", d / "dog-reference.obj",
         "--markers", d / "markers-cat-dog.json",
+        *flags,
         "--out", out,
     )
-    theirs, _, _ = morphkit.read_animation(out)
+    return morphkit.read_animation(out)[0]
+
+
+def test_cat_dog_equals_the_cli(tmp_path, cli, cat_dog):
+    VS, FS, VT, FT, frames = cat_dog_inputs(cat_dog)
+    c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, cat_dog / "markers-cat-dog.json")
+    assert len(c.marker_residuals) == 41
+    ours = morphkit.Transfer(VS, FS, VT, FT, c).transfer_many(frames[:4])
+    theirs = cli_transfer(cli, cat_dog, tmp_path / "dog")
     assert np.abs(ours - theirs[:4]).max() <= 1e-9 * diag(VT)
 
 
@@ -116,12 +124,8 @@ def test_local_stretch_self_transfer_is_exact_and_the_guard_needs_it():
 
 def test_cat_dog_best_configuration_equals_the_cli(tmp_path, cli, cat_dog):
     """refine, local_stretch and area_weighted reach the library as the CLI's flags do."""
-    d = cat_dog
-    frames_dir = d / "cat-run"
-    VS, FS = morphkit.read(d / "cat-reference.obj")
-    VT, FT = morphkit.read(d / "dog-reference.obj")
-    frames, _, _ = morphkit.read_animation(frames_dir)
-    markers = d / "markers-cat-dog.json"
+    VS, FS, VT, FT, frames = cat_dog_inputs(cat_dog)
+    markers = cat_dog / "markers-cat-dog.json"
     plain_c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, markers)
     c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, markers, refine=True)
     assert c.matches != plain_c.matches
@@ -129,17 +133,8 @@ def test_cat_dog_best_configuration_equals_the_cli(tmp_path, cli, cat_dog):
     ours = t.transfer_many(frames[:3])
     plain = morphkit.Transfer(VS, FS, VT, FT, plain_c).transfer_many(frames[:3])
     assert np.abs(ours - plain).max() > 1e-4 * diag(VT)
-    out = tmp_path / "dog"
-    cli(
-        "transfer",
-        "--source-ref", d / "cat-reference.obj",
-        "--source", frames_dir,
-        "--target", d / "dog-reference.obj",
-        "--markers", markers,
-        "--refine", "--local-stretch", "--area-weighted",
-        "--out", out,
-    )
-    theirs, _, _ = morphkit.read_animation(out)
+    flags = ("--refine", "--local-stretch", "--area-weighted")
+    theirs = cli_transfer(cli, cat_dog, tmp_path / "dog", *flags)
     assert np.abs(ours - theirs[:3]).max() <= 1e-9 * diag(VT)
 
 
