@@ -3,9 +3,10 @@
 //! The canonical equilibrium is a function of the weights alone, but the spring energy of a
 //! rig can have two equilibria over a range of weights (two bending states of a joint: distance
 //! springs across a fold line fit a fold either way; see docs/performance.md, "Whole
-//! sequences on every real rig"). A sequence that crosses such a range *jumps*: between two frames a part moves by
-//! many times the linear blend's step. Nothing converges badly there, so the solver's own
-//! report cannot tell; this check compares each step with the linear blend's.
+//! sequences on every real rig"). A sequence that crosses such a range *jumps*: between two
+//! frames a part moves by many times the linear blend's step. Nothing converges badly there,
+//! so the solver's own report cannot tell; this check compares each step with the linear
+//! blend's.
 //!
 //! For frames $k-1, k$ with physical positions $x$ and linear blends $L$ (`#V × 3` each), the
 //! *step ratio* is

@@ -32,7 +32,8 @@
 //! expressions at α = 0.1, 0.4, 0.6, 0.9 both starts reach the same minimum within
 //! 1e-8–1e-4 of the diagonal, except ICT eyeBlink_L/R at 0.6, where a thin eye strip had
 //! two minima (measured before thin bands followed the predictor,
-//! [`BlendOptions::thin_band_rings`](super::BlendOptions::thin_band_rings); see docs/performance.md).
+//! [`BlendOptions::thin_band_rings`](super::BlendOptions::thin_band_rings); see
+//! docs/performance.md).
 
 use super::blender::{FrameSolver, Rig, Start};
 use super::newton::Workspace;
