@@ -41,7 +41,33 @@ enum Command {
     Bench(cmd::bench::BenchArgs),
 }
 
+/// On SIGINT, SIGTERM or SIGHUP: remove the temporary files of the outputs being written
+/// (`morphkit::io::temporaries`), say so, and exit with 128 + the signal's number, as a shell
+/// reports a process killed by it. Outputs already in place are complete ones.
+#[cfg(unix)]
+fn remove_temporaries_on_signals() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(sig) = signals.forever().next() {
+            morphkit::io::remove_temporaries_then(|| {
+                let name = match sig {
+                    SIGINT => "SIGINT",
+                    SIGTERM => "SIGTERM",
+                    _ => "SIGHUP",
+                };
+                eprintln!("\ninterrupted ({name}): nothing more was written, and the unfinished outputs were removed");
+                std::process::exit(128 + sig)
+            });
+        }
+    });
+}
+
 fn main() {
+    #[cfg(unix)]
+    remove_temporaries_on_signals();
     let cli = Cli::parse();
     let name = match &cli.command {
         Command::Info(_) => "info",

@@ -187,6 +187,8 @@ struct Planned {
     flag: String,
     path: PathBuf,
     kind: Kind,
+    /// Written only by some runs: removed at the commit when this run did not write it.
+    sometimes: bool,
 }
 
 /// The inputs and outputs of one command, checked together; see the module docs.
@@ -281,7 +283,19 @@ impl Plan {
             flag: flag.to_string(),
             path: path.to_path_buf(),
             kind,
+            sometimes: false,
         });
+        self
+    }
+
+    /// Adds an output that only some runs write (`OUT-unconverged.ply`): when this run does
+    /// not, a file an earlier run left there is removed at the commit, since it would describe
+    /// another result.
+    pub fn output_sometimes(mut self, flag: &str, path: &Path, kind: Kind) -> Self {
+        self = self.output(flag, path, kind);
+        if let Some(o) = self.outputs.last_mut() {
+            o.sometimes = true;
+        }
         self
     }
 
@@ -304,9 +318,11 @@ impl Plan {
         for o in &self.outputs {
             self.check_location(o)?;
         }
-        Ok(Outputs {
-            staging: Staging::new(),
-        })
+        let mut staging = Staging::new();
+        for o in self.outputs.iter().filter(|o| o.sometimes) {
+            staging.remove_unless_written(&o.path);
+        }
+        Ok(Outputs { staging })
     }
 
     fn check_format(&self, o: &Planned) -> anyhow::Result<()> {

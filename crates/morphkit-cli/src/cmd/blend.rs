@@ -146,7 +146,8 @@ pub struct BlendArgs {
     /// the equilibrium is the same to the gradient tolerance) or `double`.
     #[arg(long, default_value = "single", value_parser = ["single", "double"])]
     pub factor_precision: String,
-    /// Refuse meshes whose solver would need more than this many GiB.
+    /// Refuse meshes whose solver would need more than this many GiB, and animations whose
+    /// frames would (frames × vertices, estimated before any solve).
     #[arg(long, default_value_t = 8.0)]
     pub max_memory: f64,
     /// Threads solving frames in parallel (default: the machine's cores). Results do not
@@ -222,6 +223,13 @@ fn frame_weights(a: &BlendArgs, n_shapes: usize) -> anyhow::Result<Vec<Weights>>
     }
     if let Some(f) = &a.weights_file {
         let rows = io::read_weights(f)?;
+        if rows.len() > MAX_FRAMES {
+            bail!(
+                "{}: {} rows are more than the {MAX_FRAMES} frames one run writes; split the file and run once per part",
+                f.display(),
+                rows.len()
+            );
+        }
         let mut out = Vec::with_capacity(rows.len());
         for (frame, row) in rows.iter().enumerate() {
             let w = wrap(row.values.clone());
@@ -236,6 +244,45 @@ fn frame_weights(a: &BlendArgs, n_shapes: usize) -> anyhow::Result<Vec<Weights>>
         return Ok(out);
     }
     bail!("give one of --alpha, --weights, --frames or --weights-file")
+}
+
+/// Bytes one frame's vertex holds while an animation to `out` is made: the solved positions
+/// (`f64` × 3, all frames are kept until the write) and what the writer builds in memory
+/// before the file (a .glb/.gltf buffer: `f32` positions and normals; a .usda text layer:
+/// about 40 characters a point; a .pc2 or a frame directory stream to disk).
+fn bytes_per_frame_vertex(out: &Path) -> u64 {
+    let writer = if is_frame_dir(out) {
+        0
+    } else {
+        match io::Format::from_path(out) {
+            Some(io::Format::Glb | io::Format::Gltf) => 24,
+            Some(io::Format::Usda) => 40,
+            _ => 0,
+        }
+    };
+    24 + writer
+}
+
+/// Refuses, before any solve, an animation whose frames would not fit in `max_gib` GiB
+/// (frames × vertices × [`bytes_per_frame_vertex`]), naming the estimate.
+pub(super) fn check_frames_memory(
+    out: &Path,
+    frames: usize,
+    vertices: usize,
+    max_gib: f64,
+) -> anyhow::Result<()> {
+    let per = bytes_per_frame_vertex(out);
+    let bytes = (frames as u64)
+        .saturating_mul(vertices as u64)
+        .saturating_mul(per);
+    let gib = bytes as f64 / (1u64 << 30) as f64;
+    if gib > max_gib {
+        bail!(
+            "{}: {frames} frames of {vertices} vertices would hold about {gib:.1} GiB in memory ({per} bytes per vertex and frame), over the limit of {max_gib} GiB (--max-memory); write fewer frames per run (split the weights file), or raise --max-memory",
+            out.display()
+        );
+    }
+    Ok(())
 }
 
 pub(super) fn weights_json(w: &Weights) -> serde_json::Value {
@@ -373,8 +420,8 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         .force(a.force)
         .output("--out", &a.out, Kind::MeshOrAnimation)
         .output_opt("--report", a.report.as_ref(), Kind::Json)
-        .output("OUT-unconverged.ply", &unconverged_path(&a.out), Kind::Mesh)
-        .output("OUT-jumps.ply", &jumps_path(&a.out), Kind::Mesh)
+        .output_sometimes("OUT-unconverged.ply", &unconverged_path(&a.out), Kind::Mesh)
+        .output_sometimes("OUT-jumps.ply", &jumps_path(&a.out), Kind::Mesh)
         .check()?;
     crate::util::announce_reading(&inputs);
     let shapes = io::read_shape_set(&inputs)?;
@@ -388,10 +435,11 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     if single_mesh && weights.len() != 1 {
         bail!("{}: a single-mesh output holds one frame, but {} frames were asked for; use a directory, .glb or .pc2", a.out.display(), weights.len());
     }
-    let topology = Topology::new(shapes.num_vertices(), shapes.triangles());
     if !(a.max_memory.is_finite() && a.max_memory > 0.0) {
         bail!("--max-memory must be a finite positive number of GiB");
     }
+    check_frames_memory(&a.out, weights.len(), shapes.num_vertices(), a.max_memory)?;
+    let topology = Topology::new(shapes.num_vertices(), shapes.triangles());
     let options = BlendOptions {
         springs: SpringOptions {
             k0: a.k0,

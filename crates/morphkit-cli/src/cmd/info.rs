@@ -90,8 +90,8 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
         }
         writeln!(
             out,
-            "  bounding-box diagonal  {:.6}",
-            r["bbox_diagonal"].as_f64().unwrap_or(f64::NAN)
+            "  bounding-box diagonal  {}",
+            fmt_size(r["bbox_diagonal"].as_f64().unwrap_or(f64::NAN))
         )?;
         writeln!(out, "  boundary edges         {}", r["boundary_edges"])?;
         writeln!(out, "  non-manifold edges     {}", r["non_manifold_edges"])?;
@@ -131,5 +131,15 @@ fn emit(text: &str) -> anyhow::Result<()> {
     match std::io::stdout().lock().write_all(text.as_bytes()) {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
         r => Ok(r?),
+    }
+}
+
+/// A size in fixed notation where that shows it (1e-3 to 1e9), else in scientific notation, so
+/// that a denormal mesh does not print as 0.000000.
+fn fmt_size(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e9).contains(&x.abs()) {
+        format!("{x:.6}")
+    } else {
+        format!("{x:.6e}")
     }
 }

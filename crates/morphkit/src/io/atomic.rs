@@ -42,11 +42,18 @@ pub(crate) fn write_atomic_with(
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
-    let file = std::fs::OpenOptions::new()
+    super::temporaries::record(&tmp, false);
+    let file = match std::fs::OpenOptions::new()
         .write(true)
         .create_new(true)
         .open(&tmp)
-        .map_err(|e| IoError::os(path, "create the output file", e))?;
+    {
+        Ok(f) => f,
+        Err(e) => {
+            super::temporaries::forget(&tmp);
+            return Err(IoError::os(path, "create the output file", e));
+        }
+    };
     let result = (|| {
         let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
         fill(&mut w)?;
@@ -55,10 +62,15 @@ pub(crate) fn write_atomic_with(
     })();
     if let Err(e) = result {
         let _ = std::fs::remove_file(&tmp);
+        super::temporaries::forget(&tmp);
         return Err(IoError::os(path, "write the output file", e));
     }
-    if let Err(e) = std::fs::rename(&tmp, path) {
+    let renamed = std::fs::rename(&tmp, path);
+    if renamed.is_err() {
         let _ = std::fs::remove_file(&tmp);
+    }
+    super::temporaries::forget(&tmp);
+    if let Err(e) = renamed {
         return Err(IoError::os(path, "move the finished file into place", e));
     }
     // Make the rename itself durable where the platform allows opening directories.
@@ -96,6 +108,30 @@ pub(crate) fn check_finite(path: &Path, positions: &[[f64; 3]]) -> Result<(), Io
             path,
             format!(
                 "vertex {v} has a non-finite coordinate {:?}; refusing to write it",
+                positions[v]
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Fails with an [`IoError::Content`] error naming `what` and the first vertex of `positions`
+/// that single precision cannot hold (NaN, infinite, or beyond ±3.4e38, which `as f32` would
+/// turn into ±inf): the check of every writer that stores `f32` (PC2, glTF, USD).
+pub(crate) fn check_fits_f32(
+    path: &Path,
+    what: &str,
+    positions: &[[f64; 3]],
+) -> Result<(), IoError> {
+    match positions
+        .iter()
+        .position(|p| p.iter().any(|&x| !(x as f32).is_finite()))
+    {
+        Some(v) => Err(IoError::content(
+            path,
+            format!(
+                "{what}: vertex {v} is {:?}, not representable as f32 (the format stores single \
+                 precision, up to ±3.4e38); rescale the mesh or write .obj or .ply",
                 positions[v]
             ),
         )),

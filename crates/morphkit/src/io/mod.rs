@@ -29,6 +29,7 @@ pub mod ply;
 mod sequence;
 mod source;
 mod staging;
+pub mod temporaries;
 pub mod usd;
 pub mod weights;
 
@@ -48,6 +49,7 @@ pub use sequence::{
 };
 pub use source::{strip_bom, strip_bom_str};
 pub use staging::{frame_files, is_frame_file_name, Staging};
+pub use temporaries::{remove_stale_for, remove_temporaries_then};
 pub use usd::{
     read_usd_animation, write_usd_animation, write_usd_blendshapes, UpAxis, UsdAnimation,
     UsdOptions,
@@ -76,7 +78,7 @@ pub fn read_mesh_with_report(path: &Path) -> Result<(TriMesh, ValidationReport),
         });
     }
     let mesh = match format::mesh_format(path, MESH_FORMATS)? {
-        Format::Obj { .. } => obj::parse_obj(path, &source::read_file(path)?)?,
+        Format::Obj { .. } => obj::read_obj(path)?,
         Format::Ply => ply::parse_ply(path, &source::read_file(path)?)?,
         Format::Off => off::parse_off(path, &source::read_file(path)?)?,
         Format::Gltf | Format::Glb => read_gltf_morphs(path)?.base,

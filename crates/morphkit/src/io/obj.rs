@@ -3,7 +3,8 @@
 //! Reading accepts the face forms `a`, `a/b`, `a//c` and `a/b/c`, 1-based or negative
 //! (relative to the vertices read so far) indices, extra `v` components (`w`, vertex colours),
 //! and trailing `#` comments. Polygons are fan-triangulated by [`TriMesh::from_polygons`].
-//! The parser works on the whole file in memory and allocates nothing per line.
+//! The parser allocates nothing per line; a file is read whole, or, gzip-compressed, as a
+//! stream ([`read_obj`]).
 //!
 //! Writing uses Rust's shortest round-trip formatting of `f64`, so `write` then `read` gives
 //! back the same bits, and emits the original polygons when the mesh has them.
@@ -20,18 +21,52 @@ use std::path::Path;
 /// coordinates, index 0, a relative index before the first vertex, a face with fewer than
 /// three vertices, and a face index beyond the file's vertex count.
 pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
-    let bytes = super::strip_bom(bytes);
-    let mut positions: Vec<Point> = Vec::new();
-    let mut polys = Polygons {
-        offsets: vec![0],
-        indices: Vec::new(),
-    };
-    // The largest absolute index seen and the line where it was seen, checked at the end so
-    // that (rare, but legal) forward references work.
-    let mut max_index: (u64, usize) = (0, 0);
-    for (line_no, line) in lines(bytes) {
+    let mut p = ObjParser::default();
+    for (line_no, line) in lines(super::strip_bom(bytes)) {
+        p.line(path, line_no, line)?;
+    }
+    p.finish(path)
+}
+
+/// Reads the OBJ file `path` (gzip-compressed or not) as [`parse_obj`] parses its text; a
+/// compressed file is decompressed as a stream ([`super::source::for_each_line`]), so memory
+/// is that of the mesh, not of the decompressed text.
+pub fn read_obj(path: &Path) -> Result<TriMesh, IoError> {
+    let mut p = ObjParser::default();
+    super::source::for_each_line(path, |line_no, line| p.line(path, line_no, line))?;
+    p.finish(path)
+}
+
+/// The state of an OBJ parse: what the lines so far gave.
+struct ObjParser {
+    positions: Vec<Point>,
+    polys: Polygons,
+    /// The largest absolute index seen and the line where it was seen, checked at the end so
+    /// that (rare, but legal) forward references work.
+    max_index: (u64, usize),
+}
+
+impl Default for ObjParser {
+    fn default() -> Self {
+        Self {
+            positions: Vec::new(),
+            polys: Polygons {
+                offsets: vec![0],
+                indices: Vec::new(),
+            },
+            max_index: (0, 0),
+        }
+    }
+}
+
+impl ObjParser {
+    fn line(&mut self, path: &Path, line_no: usize, line: &[u8]) -> Result<(), IoError> {
+        let (positions, polys, max_index) =
+            (&mut self.positions, &mut self.polys, &mut self.max_index);
         let mut toks = tokens(line);
-        let Some(key) = toks.next() else { continue };
+        let Some(key) = toks.next() else {
+            return Ok(());
+        };
         match key {
             b"v" => {
                 let mut p = [0.0; 3];
@@ -92,7 +127,7 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
                         ));
                     }
                     if abs >= max_index.0 {
-                        max_index = (abs, line_no);
+                        *max_index = (abs, line_no);
                     }
                     polys.indices.push(abs as u32);
                 }
@@ -108,19 +143,24 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
             }
             _ => {}
         }
+        Ok(())
     }
-    if !polys.indices.is_empty() && max_index.0 >= positions.len() as u64 {
-        return Err(IoError::parse(
-            path,
-            max_index.1,
-            format!(
-                "face index {} is out of range: the file has {} vertices",
-                max_index.0 + 1,
-                positions.len()
-            ),
-        ));
+
+    fn finish(self, path: &Path) -> Result<TriMesh, IoError> {
+        let (positions, polys, max_index) = (self.positions, self.polys, self.max_index);
+        if !polys.indices.is_empty() && max_index.0 >= positions.len() as u64 {
+            return Err(IoError::parse(
+                path,
+                max_index.1,
+                format!(
+                    "face index {} is out of range: the file has {} vertices",
+                    max_index.0 + 1,
+                    positions.len()
+                ),
+            ));
+        }
+        Ok(TriMesh::from_polygons(positions, polys))
     }
-    Ok(TriMesh::from_polygons(positions, polys))
 }
 
 /// Writes `mesh` as OBJ text (1-based indices, full `f64` precision, polygons when present).

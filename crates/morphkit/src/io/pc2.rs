@@ -139,6 +139,9 @@ pub fn write_pc2(path: &Path, cache: &PointCache) -> Result<(), IoError> {
             "too many points or samples for PC2's 32-bit counts",
         ));
     }
+    for (k, s) in cache.samples.iter().enumerate() {
+        super::atomic::check_fits_f32(path, &format!("sample {k}"), s)?;
+    }
     super::atomic::write_atomic_with(path, |w: &mut dyn Write| {
         w.write_all(MAGIC)?;
         w.write_all(&1i32.to_le_bytes())?;
@@ -160,6 +163,21 @@ pub fn write_pc2(path: &Path, cache: &PointCache) -> Result<(), IoError> {
 #[cfg(test)]
 mod fuzz_regressions {
     use super::*;
+
+    /// Issue 39: coordinates beyond f32's range were written as ±inf with exit status 0.
+    #[test]
+    fn values_beyond_f32_are_refused_and_nothing_is_written() {
+        let p = std::env::temp_dir().join(format!("morphkit-pc2-big-{}.pc2", std::process::id()));
+        let cache = PointCache {
+            start_frame: 0.0,
+            sample_rate: 1.0,
+            samples: vec![vec![[0.0; 3]; 2], vec![[0.0, 1e150, 0.0], [0.0; 3]]],
+        };
+        let e = write_pc2(&p, &cache).unwrap_err().to_string();
+        assert!(e.contains("sample 1: vertex 0"), "{e}");
+        assert!(e.contains("not representable as f32"), "{e}");
+        assert!(!p.exists());
+    }
 
     /// Found by `cargo fuzz` (target `pc2`): counts whose product overflowed the size check.
     #[test]

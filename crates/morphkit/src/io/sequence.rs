@@ -6,6 +6,7 @@ use super::format::Format;
 use super::gltf::{read_gltf_morphs, write_gltf_with, GltfMorphs, GltfOptions};
 use super::pc2::{parse_pc2, write_pc2, PointCache};
 use super::staging::commit_dir;
+use super::temporaries;
 use super::usd::{read_usd_animation, write_usd_animation, UsdOptions};
 use super::{check_not_input, obj, read_mesh, source::read_file, IoError};
 use crate::mesh::{ShapeSet, ShapeSetError};
@@ -341,14 +342,22 @@ fn write_frame_dir(
         }
     }
     let tmp = temp_sibling(out, "frames.tmp");
-    std::fs::create_dir(&tmp)
-        .map_err(|e| IoError::os(out, "create a temporary directory next to it", e))?;
+    temporaries::record(&tmp, true);
+    if let Err(e) = std::fs::create_dir(&tmp) {
+        temporaries::forget(&tmp);
+        return Err(IoError::os(
+            out,
+            "create a temporary directory next to it",
+            e,
+        ));
+    }
     let names: Vec<String> = (0..frames.len())
         .map(|i| format!("frame_{i:04}.obj"))
         .collect();
     for (i, name) in names.iter().enumerate() {
         if let Err(e) = obj::write_obj(&tmp.join(name), &frames.mesh(i), false) {
             let _ = std::fs::remove_dir_all(&tmp);
+            temporaries::forget(&tmp);
             return Err(match e {
                 // Name the destination frame, not the temporary file.
                 IoError::Content { message, .. } => IoError::content(&out.join(name), message),
@@ -358,5 +367,7 @@ fn write_frame_dir(
         on_frame(i);
     }
     // A new `out` is the renamed temporary directory; an existing one receives its frames.
-    commit_dir(&tmp, out)
+    let r = commit_dir(&tmp, out);
+    temporaries::forget(&tmp);
+    r
 }

@@ -2,7 +2,7 @@
 //! without allocating per line.
 
 use super::IoError;
-use std::io::Read;
+use std::io::{BufRead, Read};
 use std::path::Path;
 
 /// The bytes of `path`, decompressed when the file starts with the gzip magic `1f 8b`.
@@ -86,6 +86,186 @@ pub(crate) fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>, IoError> {
         member += 1;
     }
     Ok(out)
+}
+
+/// The longest line [`for_each_line`] accepts: far beyond any mesh record (a face of 10⁵
+/// vertices is about 1 MB), short enough that a stream without line breaks (a decompression
+/// bomb of zeros) is stopped after this many bytes.
+pub(crate) const MAX_LINE: usize = 16 << 20;
+
+/// Calls `f(line_number, line)` for every line of the text file `path` (1-based numbers,
+/// `\r\n` and `\n` endings stripped, a leading byte-order mark removed), with the errors of
+/// [`read_file`]. A gzip file (by magic) is decompressed as a stream, so memory stays bounded
+/// by the longest line whatever the file expands to; a line longer than [`MAX_LINE`] is an
+/// error naming its number.
+pub(crate) fn for_each_line(
+    path: &Path,
+    mut f: impl FnMut(usize, &[u8]) -> Result<(), IoError>,
+) -> Result<(), IoError> {
+    if path.is_dir() {
+        return Err(IoError::IsDirectory {
+            path: path.to_path_buf(),
+        });
+    }
+    let file = std::fs::File::open(path).map_err(|e| IoError::os(path, "read the file", e))?;
+    let mut input = std::io::BufReader::with_capacity(1 << 16, file);
+    let head = input
+        .fill_buf()
+        .map_err(|e| IoError::os(path, "read the file", e))?;
+    if !head.starts_with(&GZIP_MAGIC) {
+        drop(input);
+        let bytes = read_file(path)?;
+        for (n, line) in lines(strip_bom(&bytes)) {
+            f(n, line)?;
+        }
+        return Ok(());
+    }
+    let mut lines = LineSplitter::default();
+    let mut chunk = vec![0u8; 1 << 20];
+    let mut offset = 0u64;
+    let mut member = 0;
+    loop {
+        let head = input
+            .fill_buf()
+            .map_err(|e| IoError::os(path, "read the file", e))?;
+        if head.is_empty() {
+            break;
+        }
+        if member > 0 && !head.starts_with(&GZIP_MAGIC) {
+            // Zero bytes after the last member (tape padding) are ignored; anything else is not.
+            let mut rest = Vec::new();
+            input
+                .read_to_end(&mut rest)
+                .map_err(|e| IoError::os(path, "read the file", e))?;
+            if rest.iter().all(|&b| b == 0) {
+                break;
+            }
+            return Err(IoError::binary(
+                path,
+                offset,
+                format!(
+                    "{} bytes of trailing data after the end of the gzip stream",
+                    rest.len()
+                ),
+            ));
+        }
+        let mut dec = flate2::bufread::GzDecoder::new(CountingReader {
+            inner: &mut input,
+            count: &mut offset,
+        });
+        loop {
+            let k = match dec.read(&mut chunk) {
+                Ok(k) => k,
+                Err(e) => {
+                    let message = if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                        format!("the gzip stream (member {member}) is truncated")
+                    } else {
+                        format!("corrupt gzip stream (member {member}): {e}")
+                    };
+                    let at = *dec.get_ref().count;
+                    return Err(IoError::binary(path, at, message));
+                }
+            };
+            if k == 0 {
+                break;
+            }
+            lines.push(path, &chunk[..k], &mut f)?;
+        }
+        member += 1;
+    }
+    if lines.bytes == 0 {
+        return Err(IoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    lines.finish(&mut f)
+}
+
+/// A `BufRead` that counts the bytes consumed from it (the offset for gzip errors).
+struct CountingReader<'a, R> {
+    inner: &'a mut R,
+    count: &'a mut u64,
+}
+
+impl<R: BufRead> Read for CountingReader<'_, R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let k = self.inner.read(buf)?;
+        *self.count += k as u64;
+        Ok(k)
+    }
+}
+
+impl<R: BufRead> std::io::BufRead for CountingReader<'_, R> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        self.inner.fill_buf()
+    }
+    fn consume(&mut self, amt: usize) {
+        *self.count += amt as u64;
+        self.inner.consume(amt);
+    }
+}
+
+/// Splits a stream of chunks into lines, keeping only the unfinished last line.
+#[derive(Default)]
+struct LineSplitter {
+    partial: Vec<u8>,
+    number: usize,
+    bytes: u64,
+}
+
+impl LineSplitter {
+    fn push(
+        &mut self,
+        path: &Path,
+        mut chunk: &[u8],
+        f: &mut impl FnMut(usize, &[u8]) -> Result<(), IoError>,
+    ) -> Result<(), IoError> {
+        if self.bytes == 0 {
+            chunk = strip_bom(chunk);
+        }
+        self.bytes += chunk.len() as u64;
+        while let Some(i) = chunk.iter().position(|&b| b == b'\n') {
+            self.number += 1;
+            if self.partial.is_empty() {
+                f(self.number, strip_cr(&chunk[..i]))?;
+            } else {
+                self.partial.extend_from_slice(&chunk[..i]);
+                self.check(path)?;
+                let line = std::mem::take(&mut self.partial);
+                f(self.number, strip_cr(&line))?;
+                self.partial = line;
+                self.partial.clear();
+            }
+            chunk = &chunk[i + 1..];
+        }
+        self.partial.extend_from_slice(chunk);
+        self.check(path)
+    }
+
+    fn check(&self, path: &Path) -> Result<(), IoError> {
+        if self.partial.len() > MAX_LINE {
+            return Err(IoError::parse(
+                path,
+                self.number + 1,
+                format!(
+                    "the line is longer than {} MiB (no line break in the data; not a text mesh?)",
+                    MAX_LINE >> 20
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn finish(
+        self,
+        f: &mut impl FnMut(usize, &[u8]) -> Result<(), IoError>,
+    ) -> Result<(), IoError> {
+        f(self.number + 1, strip_cr(&self.partial))
+    }
+}
+
+fn strip_cr(l: &[u8]) -> &[u8] {
+    l.strip_suffix(b"\r").unwrap_or(l)
 }
 
 /// `bytes` without a leading UTF-8 byte-order mark (`EF BB BF`), which some Windows editors

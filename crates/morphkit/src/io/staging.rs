@@ -29,6 +29,8 @@ struct Entry {
 #[derive(Debug, Default)]
 pub struct Staging {
     entries: Vec<Entry>,
+    /// Files an earlier run may have left that this run owns but did not write.
+    obsolete: Vec<PathBuf>,
 }
 
 /// True for the names frame directories hold: `frame_*.obj`.
@@ -68,16 +70,26 @@ impl Staging {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
         };
+        // What a killed earlier run left for this destination goes first.
+        super::temporaries::remove_stale_for(dest);
         let tmp = parent.join(format!(
             ".stage-{}-{}-{name}",
             std::process::id(),
             COUNTER.fetch_add(1, Ordering::Relaxed)
         ));
+        super::temporaries::record(&tmp, dir);
         if dir {
-            std::fs::create_dir_all(&parent)
-                .map_err(|e| IoError::os(dest, "create the parent directory", e))?;
-            std::fs::create_dir(&tmp)
-                .map_err(|e| IoError::os(dest, "create a temporary directory next to it", e))?;
+            let made = std::fs::create_dir_all(&parent)
+                .map_err(|e| IoError::os(dest, "create the parent directory", e))
+                .and_then(|_| {
+                    std::fs::create_dir(&tmp).map_err(|e| {
+                        IoError::os(dest, "create a temporary directory next to it", e)
+                    })
+                });
+            if let Err(e) = made {
+                super::temporaries::forget(&tmp);
+                return Err(e);
+            }
         }
         self.entries.push(Entry {
             tmp: tmp.clone(),
@@ -99,10 +111,19 @@ impl Staging {
         write(&tmp).map_err(|e| e.at_path(dest))
     }
 
-    /// Moves every staged output into place, in staging order. A rename that fails leaves the
+    /// Makes [`Staging::commit`] remove the file `dest` unless this staging wrote it: an
+    /// output a command writes only sometimes (a region of unconverged vertices), so that a
+    /// file from an earlier run never sits beside new outputs that contradict it.
+    pub fn remove_unless_written(&mut self, dest: &Path) {
+        self.obsolete.push(dest.to_path_buf());
+    }
+
+    /// Moves every staged output into place, in staging order, then removes the files given to
+    /// [`Staging::remove_unless_written`] that were not written. A rename that fails leaves the
     /// outputs before it in place and removes the remaining temporaries.
     pub fn commit(mut self) -> Result<(), IoError> {
         let entries = std::mem::take(&mut self.entries);
+        let mut written = Vec::with_capacity(entries.len());
         let mut it = entries.into_iter();
         while let Some(e) = it.next() {
             let r = if e.dir {
@@ -111,10 +132,20 @@ impl Staging {
                 std::fs::rename(&e.tmp, &e.dest)
                     .map_err(|err| IoError::os(&e.dest, "move the finished file into place", err))
             };
+            if r.is_ok() {
+                super::temporaries::forget(&e.tmp);
+            }
             if let Err(err) = r {
                 remove(&e);
                 it.for_each(|e| remove(&e));
                 return Err(err);
+            }
+            written.push(e.dest);
+        }
+        for p in std::mem::take(&mut self.obsolete) {
+            if !written.contains(&p) && p.is_file() {
+                std::fs::remove_file(&p)
+                    .map_err(|e| IoError::os(&p, "remove the output of an earlier run", e))?;
             }
         }
         Ok(())
@@ -135,6 +166,7 @@ fn remove(e: &Entry) {
     } else {
         let _ = std::fs::remove_file(&e.tmp);
     }
+    super::temporaries::forget(&e.tmp);
 }
 
 /// Moves the frames of the finished directory `tmp` into `dest` (see the module docs).
@@ -213,6 +245,37 @@ mod tests {
         );
         drop(s);
         assert!(names(&d).is_empty(), "{:?}", names(&d));
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn outputs_not_written_this_time_are_removed_at_commit() {
+        let d = tmp_dir("obsolete");
+        std::fs::write(d.join("out-unconverged.ply"), "old").unwrap();
+        std::fs::write(d.join("out-jumps.ply"), "old").unwrap();
+        let mut s = Staging::new();
+        s.remove_unless_written(&d.join("out-unconverged.ply"));
+        s.remove_unless_written(&d.join("out-jumps.ply"));
+        s.write(&d.join("out-jumps.ply"), false, |p| {
+            super::super::write_atomic(p, b"new")
+        })
+        .unwrap();
+        // An uncommitted staging removes nothing.
+        drop(s);
+        assert_eq!(names(&d), ["out-jumps.ply", "out-unconverged.ply"]);
+        let mut s = Staging::new();
+        s.remove_unless_written(&d.join("out-unconverged.ply"));
+        s.remove_unless_written(&d.join("out-jumps.ply"));
+        s.write(&d.join("out-jumps.ply"), false, |p| {
+            super::super::write_atomic(p, b"new")
+        })
+        .unwrap();
+        s.commit().unwrap();
+        assert_eq!(names(&d), ["out-jumps.ply"]);
+        assert_eq!(
+            std::fs::read_to_string(d.join("out-jumps.ply")).unwrap(),
+            "new"
+        );
         let _ = std::fs::remove_dir_all(&d);
     }
 

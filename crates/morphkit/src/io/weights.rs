@@ -18,7 +18,8 @@ pub const MAX_WEIGHTS_FILE_BYTES: u64 = 256 << 20;
 pub struct WeightRow {
     /// 1-based line of a CSV row; `None` for JSON.
     pub line: Option<usize>,
-    /// The row's text as written (CSV), for messages; empty for JSON.
+    /// The row's text as written (CSV), shortened to its first 60 characters and `…` (a row
+    /// of 10⁶ weights is not echoed whole in a message); empty for JSON.
     pub text: String,
     /// The weights.
     pub values: Vec<f64>,
@@ -136,7 +137,7 @@ fn parse_csv(path: &Path, text: &str) -> Result<Vec<WeightRow>, IoError> {
         }
         rows.push(WeightRow {
             line: Some(n + 1),
-            text: line.to_string(),
+            text: show(line),
             values,
         });
     }
@@ -155,6 +156,18 @@ fn show(s: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 39: an error about a row of 10⁶ weights quoted the whole 4 MB line.
+    #[test]
+    fn long_rows_are_kept_and_quoted_short() {
+        let row = vec!["0.5"; 1_000_000].join(",");
+        let rows = parse_weights(p(), &format!("{row}\n{row}\n"), false).unwrap();
+        assert_eq!(rows[1].values.len(), 1_000_000);
+        assert!(rows[1].text.chars().count() <= 61, "{}", rows[1].text.len());
+        let bad = format!("{row},x\n");
+        let e = parse_weights(p(), &bad, false).unwrap_err().to_string();
+        assert!(e.len() < 300, "{} bytes", e.len());
+    }
 
     fn p() -> &'static Path {
         Path::new("w.csv")

@@ -156,7 +156,16 @@ pub fn bounding_box(p: &[Point]) -> (Point, Point) {
 /// Bounding-box diagonal of a point set.
 pub fn bbox_diagonal(p: &[Point]) -> f64 {
     let (lo, hi) = bounding_box(p);
-    norm(sub(hi, lo))
+    let d = sub(hi, lo);
+    let n = norm(d);
+    // Where squaring underflowed (denormal sizes, 1e-310) or overflowed (1e200), scaled by the
+    // largest extent; other sizes keep the plain norm, bit for bit.
+    let m = d.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    if n.is_normal() || m == 0.0 || !m.is_finite() {
+        n
+    } else {
+        m * norm(d.map(|x| x / m))
+    }
 }
 
 /// Signed volume enclosed by the triangles `tris` over the points `p`: $\sum_t a \cdot (b

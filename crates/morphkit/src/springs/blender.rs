@@ -79,6 +79,7 @@ impl PhysicalBlend {
         for s in 0..shapes.len() {
             validate(&shapes.mesh(s))?;
         }
+        super::spring_set::check_scale(shapes)?;
         let n = shapes.num_vertices();
         let topology = Topology::new(n, shapes.triangles());
         let springs = SpringSet::new(shapes, &topology, &o.springs);

@@ -113,7 +113,7 @@ pub use options::{
     Predictor, RigSummary, AGGREGATION_FLOPS_PER_ENTRY,
 };
 pub use predictor::BlendPredictor;
-pub use spring_set::{Spring, SpringKind, SpringOptions, SpringSet, StiffnessRule};
+pub use spring_set::{Spring, SpringKind, SpringOptions, SpringSet, StiffnessRule, SCALE_RANGE};
 pub use terms::{HingeOptions, PointTarget};
 pub use weights::Weights;
 
@@ -207,6 +207,15 @@ pub enum BlendError {
     DegenerateShape {
         /// The shape's name.
         shape: String,
+    },
+    /// A shape's size is beyond what double precision can solve (squared lengths and their
+    /// products would underflow to zero or overflow to infinity).
+    #[error("shape '{shape}' has a size (largest bounding-box extent {extent:e}) outside the range the solver works in, {:e} to {:e}: its squared lengths would {}; rescale the meshes (the same factor for every shape, e.g. to centimetres or metres) and blend again", SCALE_RANGE.0, SCALE_RANGE.1, if *extent < SCALE_RANGE.0 { "underflow to zero" } else { "overflow to infinity" })]
+    Scale {
+        /// The shape's name (its file name when read from files).
+        shape: String,
+        /// Its largest bounding-box extent.
+        extent: f64,
     },
     /// The solver would need more memory than allowed.
     #[error("the physical blend of {vertices} vertices would need about {} of memory, over the limit of {}; raise the limit (--max-memory in the CLI), leave out bending springs if they are on, or blend a decimated mesh", gib(*predicted_bytes), gib(*limit_bytes))]

@@ -83,6 +83,31 @@ pub struct SpringSet {
     dropped: usize,
 }
 
+/// The sizes (largest bounding-box extent) the solver accepts: lengths to the fourth power, as
+/// in the energy's Hessian, stay normal double-precision numbers well inside this range.
+pub const SCALE_RANGE: (f64, f64) = (1e-50, 1e50);
+
+/// Refuses a shape whose size is outside [`SCALE_RANGE`] ([`BlendError::Scale`] names it):
+/// a mesh of denormal coordinates would collapse to a point, one of 1e150 overflow.
+pub fn check_scale(shapes: &ShapeSet) -> Result<(), BlendError> {
+    for s in 0..shapes.len() {
+        let p = shapes.positions(s);
+        let mut extent = 0.0f64;
+        for k in 0..3 {
+            let lo = p.iter().map(|q| q[k]).fold(f64::INFINITY, f64::min);
+            let hi = p.iter().map(|q| q[k]).fold(f64::NEG_INFINITY, f64::max);
+            extent = extent.max(hi - lo);
+        }
+        if !(SCALE_RANGE.0..=SCALE_RANGE.1).contains(&extent) {
+            return Err(BlendError::Scale {
+                shape: shapes.name(s).to_string(),
+                extent,
+            });
+        }
+    }
+    Ok(())
+}
+
 impl SpringSet {
     /// Mean stiffness scale and mean squared rest length of the base's structure springs of
     /// positive length, under `rule` (the stiffness without $k_0$): the units of the hinges'

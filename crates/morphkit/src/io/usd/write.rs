@@ -16,16 +16,7 @@ fn check_points(path: &Path, what: &str, p: &[Point], nv: usize) -> Result<(), I
             format!("{what} has {} points, the mesh has {nv} vertices", p.len()),
         ));
     }
-    if let Some(v) = p
-        .iter()
-        .position(|q| q.iter().any(|&x| !(x as f32).is_finite()))
-    {
-        return Err(IoError::content(
-            path,
-            format!("{what}: vertex {v} is {:?}, not representable as f32", p[v]),
-        ));
-    }
-    Ok(())
+    crate::io::atomic::check_fits_f32(path, what, p)
 }
 
 /// The layer header: `#usda 1.0` and the stage metadata.
