@@ -289,6 +289,37 @@ fn degenerate_or_too_large_input_is_refused() {
     .unwrap_err();
     assert!(matches!(e, BlendError::TooLarge { .. }), "{e}");
     assert!(e.to_string().contains("GiB"), "{e}");
+    // Issue 39: the count-based lower bound refuses first and says so; it never exceeds the
+    // symbolic estimate, which a limit just under the estimate still refuses.
+    let BlendError::TooLarge {
+        predicted_bytes: bound,
+        at_least: true,
+        ..
+    } = e
+    else {
+        panic!("expected the early, count-based refusal: {e}");
+    };
+    let ok = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap();
+    let exact = ok.summary().predicted_bytes;
+    assert!(bound <= exact, "lower bound {bound} > estimate {exact}");
+    let e = PhysicalBlend::new(
+        &s,
+        &BlendOptions {
+            max_memory_bytes: exact - 1,
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            BlendError::TooLarge {
+                at_least: false,
+                ..
+            }
+        ),
+        "{e}"
+    );
 }
 
 /// Fig. 5 of Ma et al.: a vertex pulled by hand drags its neighbourhood along; the fixed part

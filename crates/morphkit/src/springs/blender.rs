@@ -11,7 +11,10 @@ use super::predictor::BlendPredictor;
 use super::reference::{Factor, References};
 use super::rotation_predictor::RotationPredictor;
 use super::sampled_start::{shifted, Sampler, StartSamples};
-use super::system::{expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem};
+use super::system::{
+    expand_vertex_order, predicted_bytes, predicted_bytes_lower_bound, vertex_nested_dissection,
+    FreeSystem,
+};
 use super::terms::{
     BlockHessian, BlockPattern, EnergyTerm, Held, HingeTerm, PointTarget, PointTerm, SpringTerm,
     TermParameters,
@@ -76,6 +79,20 @@ impl PhysicalBlend {
     ) -> Result<Self, BlendError> {
         let o = options;
         check_options(o)?;
+        let bound =
+            predicted_bytes_lower_bound(
+                shapes.num_vertices(),
+                shapes.triangles(),
+                o.factor_precision,
+            ) + StartSamples::bytes(shapes.num_vertices(), shapes.len() - 1, o.sampled_start);
+        if bound > o.max_memory_bytes {
+            return Err(BlendError::TooLarge {
+                vertices: shapes.num_vertices(),
+                predicted_bytes: bound,
+                limit_bytes: o.max_memory_bytes,
+                at_least: true,
+            });
+        }
         for s in 0..shapes.len() {
             validate(&shapes.mesh(s))?;
         }
@@ -163,6 +180,7 @@ impl PhysicalBlend {
                 vertices: n,
                 predicted_bytes: summary.predicted_bytes,
                 limit_bytes: o.max_memory_bytes,
+                at_least: false,
             });
         }
         let system = FreeSystem::new(block_pattern.clone(), &constraints.fixed_dof)?;

@@ -218,7 +218,7 @@ pub enum BlendError {
         extent: f64,
     },
     /// The solver would need more memory than allowed.
-    #[error("the physical blend of {vertices} vertices would need about {} of memory, over the limit of {}; raise the limit (--max-memory in the CLI), leave out bending springs if they are on, or blend a decimated mesh", gib(*predicted_bytes), gib(*limit_bytes))]
+    #[error("the physical blend of {vertices} vertices would need {} {} of memory, over the limit of {}; raise the limit (--max-memory in the CLI), leave out bending springs if they are on, or blend a decimated mesh", if *at_least { "at least" } else { "about" }, gib(*predicted_bytes), gib(*limit_bytes))]
     TooLarge {
         /// Vertex count.
         vertices: usize,
@@ -226,6 +226,9 @@ pub enum BlendError {
         predicted_bytes: u64,
         /// The limit ([`BlendOptions::max_memory_bytes`]).
         limit_bytes: u64,
+        /// The prediction is a lower bound from the counts alone (made before any
+        /// connectivity is built), not the symbolic analysis's estimate.
+        at_least: bool,
     },
     /// The linear system could not be solved.
     #[error("equilibrium solve failed: {0}")]

@@ -98,7 +98,8 @@ pub fn check_scale(shapes: &ShapeSet) -> Result<(), BlendError> {
             let hi = p.iter().map(|q| q[k]).fold(f64::NEG_INFINITY, f64::max);
             extent = extent.max(hi - lo);
         }
-        if !(SCALE_RANGE.0..=SCALE_RANGE.1).contains(&extent) {
+        // A shape collapsed to one point is [`BlendError::DegenerateShape`]'s to name.
+        if extent != 0.0 && !(SCALE_RANGE.0..=SCALE_RANGE.1).contains(&extent) {
             return Err(BlendError::Scale {
                 shape: shapes.name(s).to_string(),
                 extent,
