@@ -555,6 +555,19 @@ impl Outputs {
         })?)
     }
 
+    /// Stages an animation written frame by frame ([`io::FrameStream`]: a frame directory
+    /// when `dir`, else `.pc2`) of `frames` frames of `base`'s connectivity.
+    pub fn stream(
+        &mut self,
+        path: &Path,
+        dir: bool,
+        base: &TriMesh,
+        frames: usize,
+    ) -> anyhow::Result<io::FrameStream> {
+        let tmp = self.staging.stage(path, dir)?;
+        Ok(io::FrameStream::create(&tmp, path, dir, base, frames)?)
+    }
+
     /// Stages an output that `write` produces at the temporary path it is given (a file, or a
     /// directory when `dir`): for writers without a method of their own.
     pub fn custom(

@@ -49,6 +49,10 @@ vertices are written, coloured red, to OUT-unconverged.ply beside the output.";
 /// Most frames one call produces.
 const MAX_FRAMES: usize = 100_000;
 
+/// Frames solved before they are handed on: a streamed output (frame directory, .pc2) holds
+/// no more than this many at a time.
+const FRAME_CHUNK: usize = 256;
+
 /// Arguments of `morphkit blend`.
 #[derive(clap::Args, Debug)]
 #[command(after_help = EXAMPLES)]
@@ -249,18 +253,18 @@ fn frame_weights(a: &BlendArgs, n_shapes: usize) -> anyhow::Result<Vec<Weights>>
 /// Bytes one frame's vertex holds while an animation to `out` is made: the solved positions
 /// (`f64` × 3, all frames are kept until the write) and what the writer builds in memory
 /// before the file (a .glb/.gltf buffer: `f32` positions and normals; a .usda text layer:
-/// about 40 characters a point; a .pc2 or a frame directory stream to disk).
+/// about 40 characters a point). A frame directory or .pc2 is streamed
+/// ([`io::FrameStream`]) and holds [`FRAME_CHUNK`] frames at most: nothing per frame.
 fn bytes_per_frame_vertex(out: &Path) -> u64 {
-    let writer = if is_frame_dir(out) {
-        0
-    } else {
-        match io::Format::from_path(out) {
-            Some(io::Format::Glb | io::Format::Gltf) => 24,
-            Some(io::Format::Usda) => 40,
-            _ => 0,
-        }
-    };
-    24 + writer
+    let dir = is_frame_dir(out);
+    if io::FrameStream::supports(out, dir) {
+        return 0;
+    }
+    24 + match io::Format::from_path(out) {
+        Some(io::Format::Glb | io::Format::Gltf) => 24,
+        Some(io::Format::Usda) => 40,
+        _ => 0,
+    }
 }
 
 /// Refuses, before any solve, an animation whose frames would not fit in `max_gib` GiB
@@ -491,47 +495,68 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         weights.len() as u64,
         if a.linear { "linear" } else { "physical" },
     );
-    let results = solve_frames(solver.as_mut(), &weights, threads, &bar)?;
-    bar.finish_and_clear();
-    let mut frames = Vec::with_capacity(weights.len());
+    // A frame directory or .pc2 receives each chunk of frames as it is solved; other formats
+    // need every frame before the file.
+    let dir_out = is_frame_dir(&a.out);
+    let mut stream = if !single_mesh && io::FrameStream::supports(&a.out, dir_out) {
+        Some(outputs.stream(&a.out, dir_out, shapes.base(), weights.len())?)
+    } else {
+        None
+    };
+    let mut frames = Vec::new();
     let mut rows = Vec::with_capacity(weights.len());
     let mut unconverged = Vec::new();
     let mut failed = vec![false; shapes.num_vertices()];
     let mut clamped = Vec::new();
     let mut steps = ContinuityCheck::new(JUMP_BOUND, shapes.base().bbox_diagonal());
-    for (k, (w, r)) in weights.iter().zip(results).enumerate() {
-        let linear = linear_blend(&shapes, w)?;
-        let mut row = json!({ "frame": k, "weights": weights_json(w) });
-        if a.report.is_some() {
-            row["linear"] = json!(blend_metrics(&shapes, &topology, w, &linear)?);
-        }
-        let positions = match r {
-            None => linear,
-            Some(r) => {
-                if !r.stats.converged {
-                    unconverged.push(k);
-                    for &v in &r.stats.unconverged_vertices {
-                        failed[v as usize] = true;
-                    }
-                }
-                if r.stats.clamped_springs > 0 {
-                    clamped.push((k, r.stats.clamped_springs));
-                }
-                if a.report.is_some() {
-                    row["physical"] = json!(blend_metrics(&shapes, &topology, w, &r.positions)?);
-                    row["folds"] = json!(fold_metrics(&shapes, &topology, w, &r.positions)?);
-                }
-                row["solver"] = json!(r.stats);
-                steps.push(&r.positions, &linear)?;
-                r.positions
+    let mut write_seconds = 0.0;
+    for (c, chunk) in weights.chunks(FRAME_CHUNK).enumerate() {
+        let results = solve_frames(solver.as_mut(), chunk, threads, &bar)
+            .with_context(|| format!("frames from {}", c * FRAME_CHUNK))?;
+        for (i, (w, r)) in chunk.iter().zip(results).enumerate() {
+            let k = c * FRAME_CHUNK + i;
+            let linear = linear_blend(&shapes, w)?;
+            let mut row = json!({ "frame": k, "weights": weights_json(w) });
+            if a.report.is_some() {
+                row["linear"] = json!(blend_metrics(&shapes, &topology, w, &linear)?);
             }
-        };
-        if positions.iter().flatten().any(|v| !v.is_finite()) {
-            bail!("frame {k}: the result has non-finite coordinates; nothing was written");
+            let positions = match r {
+                None => linear,
+                Some(r) => {
+                    if !r.stats.converged {
+                        unconverged.push(k);
+                        for &v in &r.stats.unconverged_vertices {
+                            failed[v as usize] = true;
+                        }
+                    }
+                    if r.stats.clamped_springs > 0 {
+                        clamped.push((k, r.stats.clamped_springs));
+                    }
+                    if a.report.is_some() {
+                        row["physical"] =
+                            json!(blend_metrics(&shapes, &topology, w, &r.positions)?);
+                        row["folds"] = json!(fold_metrics(&shapes, &topology, w, &r.positions)?);
+                    }
+                    row["solver"] = json!(r.stats);
+                    steps.push(&r.positions, &linear)?;
+                    r.positions
+                }
+            };
+            if positions.iter().flatten().any(|v| !v.is_finite()) {
+                bail!("frame {k}: the result has non-finite coordinates; nothing was written");
+            }
+            match &mut stream {
+                Some(s) => {
+                    let t = Instant::now();
+                    s.push(&positions)?;
+                    write_seconds += t.elapsed().as_secs_f64();
+                }
+                None => frames.push((format!("frame_{k:04}"), positions)),
+            }
+            rows.push(row);
         }
-        frames.push((format!("frame_{k:04}"), positions));
-        rows.push(row);
     }
+    bar.finish_and_clear();
     let failed_ply = (!unconverged.is_empty()).then(|| unconverged_path(&a.out));
     if let Some(path) = &failed_ply {
         let count = failed.iter().filter(|f| **f).count();
@@ -555,21 +580,25 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
             clamped[0].0
         );
     }
-    let out_set = ShapeSet::new(shapes.base().clone(), frames)?;
     let t_write = Instant::now();
-    if single_mesh {
-        outputs.mesh(&a.out, &out_set.mesh(0))?;
+    if let Some(s) = stream {
+        s.finish()?;
     } else {
-        let mut opts = FramesOptions {
-            fps: a.fps,
-            inputs: inputs.clone(),
-            ..FramesOptions::default()
-        };
-        opts.gltf.extras =
-            Some(json!({ "weights": weights.iter().map(weights_json).collect::<Vec<_>>() }));
-        outputs.frames(&a.out, &out_set, &opts, |_| {})?;
+        let out_set = ShapeSet::new(shapes.base().clone(), frames)?;
+        if single_mesh {
+            outputs.mesh(&a.out, &out_set.mesh(0))?;
+        } else {
+            let mut opts = FramesOptions {
+                fps: a.fps,
+                inputs: inputs.clone(),
+                ..FramesOptions::default()
+            };
+            opts.gltf.extras =
+                Some(json!({ "weights": weights.iter().map(weights_json).collect::<Vec<_>>() }));
+            outputs.frames(&a.out, &out_set, &opts, |_| {})?;
+        }
     }
-    let write_seconds = t_write.elapsed().as_secs_f64();
+    write_seconds += t_write.elapsed().as_secs_f64();
     if let Some(r) = &a.report {
         let report = json!({
             "command": "blend",

@@ -21,6 +21,7 @@ mod atomic;
 pub mod colors;
 mod error;
 mod format;
+mod frame_stream;
 pub mod gltf;
 pub mod obj;
 pub mod off;
@@ -37,6 +38,7 @@ pub use atomic::{canonical_path, check_not_input, write_atomic};
 pub use colors::{diverging, scalar_colors, viridis, Colors, NAN_GREY};
 pub use error::IoError;
 pub use format::Format;
+pub use frame_stream::FrameStream;
 pub use gltf::{
     parse_gltf_morphs, read_gltf_morphs, write_gltf_morphs, write_gltf_scene,
     write_gltf_scene_with, write_gltf_with, GltfMorphs, GltfOptions, GltfRigidMesh, GltfSummary,

@@ -143,12 +143,13 @@ pub fn write_pc2(path: &Path, cache: &PointCache) -> Result<(), IoError> {
         super::atomic::check_fits_f32(path, &format!("sample {k}"), s)?;
     }
     super::atomic::write_atomic_with(path, |w: &mut dyn Write| {
-        w.write_all(MAGIC)?;
-        w.write_all(&1i32.to_le_bytes())?;
-        w.write_all(&(np as i32).to_le_bytes())?;
-        w.write_all(&cache.start_frame.to_le_bytes())?;
-        w.write_all(&cache.sample_rate.to_le_bytes())?;
-        w.write_all(&(cache.samples.len() as i32).to_le_bytes())?;
+        write_header(
+            w,
+            np,
+            cache.start_frame,
+            cache.sample_rate,
+            cache.samples.len(),
+        )?;
         for s in &cache.samples {
             for p in s {
                 for x in p {
@@ -158,6 +159,23 @@ pub fn write_pc2(path: &Path, cache: &PointCache) -> Result<(), IoError> {
         }
         Ok(())
     })
+}
+
+/// Writes the 32-byte header of a cache of `samples` samples of `points` points (counts that
+/// fit PC2's `i32`, checked by the callers).
+pub(crate) fn write_header(
+    w: &mut dyn Write,
+    points: usize,
+    start_frame: f32,
+    sample_rate: f32,
+    samples: usize,
+) -> std::io::Result<()> {
+    w.write_all(MAGIC)?;
+    w.write_all(&1i32.to_le_bytes())?;
+    w.write_all(&(points as i32).to_le_bytes())?;
+    w.write_all(&start_frame.to_le_bytes())?;
+    w.write_all(&sample_rate.to_le_bytes())?;
+    w.write_all(&(samples as i32).to_le_bytes())
 }
 
 #[cfg(test)]
