@@ -9,18 +9,23 @@
 //! - `--weights-file F`: one weight vector per frame, JSON (`{"frames": [[…], …]}` or a bare
 //!   array of arrays) or CSV (one row per frame; `#` comments and a non-numeric header skipped).
 
-use crate::outputs::{is_frame_dir, Kind, Outputs, Plan};
-use crate::util::{check_fps, check_positive, progress, read_json};
-use crate::weights::{self, Origin};
+use crate::outputs::{is_frame_dir, Kind, Plan};
+use crate::util::{check_fps, check_positive, progress};
 use anyhow::{bail, Context};
 use morphkit::io::{self, FramesOptions};
-use morphkit::mesh::{ShapeSet, Topology};
+use morphkit::mesh::{ShapeSet, Topology, Weld, WELD_TOLERANCE};
 use morphkit::springs::{
-    blend_metrics, fold_metrics, linear_blend, BlendOptions, BlendResult, Continuity,
-    ContinuityCheck, FixedVertices, HingeOptions, PhysicalBlend, Precision, SpringOptions, Weights,
-    JUMP_BOUND,
+    blend_metrics, fold_metrics, linear_blend, BlendOptions, BlendResult, ContinuityCheck,
+    HingeOptions, PhysicalBlend, Precision, SpringOptions, Weights, JUMP_BOUND,
 };
 use serde_json::json;
+
+pub(super) use super::blend_inputs::{
+    check_frames_memory, frame_weights, read_fixed, welded_fixed,
+};
+pub(super) use super::blend_outputs::{
+    jumps_path, mark_failed, report_jumps, unconverged_path, weights_json, write_region,
+};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -47,11 +52,11 @@ A frame that does not converge is reported on stderr and in --report, and its fa
 vertices are written, coloured red, to OUT-unconverged.ply beside the output.";
 
 /// Most frames one call produces.
-const MAX_FRAMES: usize = 100_000;
+pub(super) const MAX_FRAMES: usize = 100_000;
 
 /// Frames solved before they are handed on: a streamed output (frame directory, .pc2) holds
 /// no more than this many at a time.
-const FRAME_CHUNK: usize = 256;
+pub(super) const FRAME_CHUNK: usize = 256;
 
 /// Arguments of `morphkit blend`.
 #[derive(clap::Args, Debug)]
@@ -181,196 +186,6 @@ pub struct BlendArgs {
     pub interior: String,
 }
 
-fn read_fixed(spec: &str) -> anyhow::Result<FixedVertices> {
-    Ok(match spec {
-        "auto" => FixedVertices::Auto,
-        "none" => FixedVertices::None,
-        file => {
-            let v = read_json(Path::new(file), "fixed-vertex file (or use auto / none)")?;
-            let ids = v.get("fixed").unwrap_or(&v);
-            let ids: Vec<u32> = serde_json::from_value(ids.clone())
-                .with_context(|| format!("{file}: expected {{\"fixed\": [vertex ids]}} or an array of non-negative integers"))?;
-            FixedVertices::Ids(ids)
-        }
-    })
-}
-
-/// The weight vectors of every frame.
-fn frame_weights(a: &BlendArgs, n_shapes: usize) -> anyhow::Result<Vec<Weights>> {
-    let wrap = |w: Vec<f64>| {
-        if a.convex {
-            Weights::Convex(w)
-        } else {
-            Weights::Delta(w)
-        }
-    };
-    if let Some(alpha) = a.alpha {
-        let w = Weights::Alpha(alpha);
-        weights::check(&w, n_shapes, Origin::Flag("--alpha"))?;
-        return Ok(vec![w]);
-    }
-    if let Some(w) = &a.weights {
-        let w = wrap(w.clone());
-        weights::check(&w, n_shapes, Origin::Flag("--weights"))?;
-        return Ok(vec![w]);
-    }
-    if let Some(n) = a.frames {
-        if n_shapes != 2 {
-            bail!("--frames needs exactly one --target (got {}); use --weights-file for several targets", n_shapes - 1);
-        }
-        if !(2..=MAX_FRAMES).contains(&n) {
-            bail!("--frames must be between 2 (α = 0 and 1) and {MAX_FRAMES}, got {n}");
-        }
-        return Ok((0..n)
-            .map(|k| Weights::Alpha(k as f64 / (n - 1) as f64))
-            .collect());
-    }
-    if let Some(f) = &a.weights_file {
-        let rows = io::read_weights(f)?;
-        if rows.len() > MAX_FRAMES {
-            bail!(
-                "{}: {} rows are more than the {MAX_FRAMES} frames one run writes; split the file and run once per part",
-                f.display(),
-                rows.len()
-            );
-        }
-        let mut out = Vec::with_capacity(rows.len());
-        for (frame, row) in rows.iter().enumerate() {
-            let w = wrap(row.values.clone());
-            let origin = Origin::File {
-                path: f,
-                row,
-                frame,
-            };
-            weights::check(&w, n_shapes, origin)?;
-            out.push(w);
-        }
-        return Ok(out);
-    }
-    bail!("give one of --alpha, --weights, --frames or --weights-file")
-}
-
-/// Bytes one frame's vertex holds while an animation to `out` is made: the solved positions
-/// (`f64` × 3, all frames are kept until the write) and what the writer builds in memory
-/// before the file (a .glb/.gltf buffer: `f32` positions and normals; a .usda text layer:
-/// about 40 characters a point). A frame directory or .pc2 is streamed
-/// ([`io::FrameStream`]) and holds [`FRAME_CHUNK`] frames at most: nothing per frame.
-fn bytes_per_frame_vertex(out: &Path) -> u64 {
-    let dir = is_frame_dir(out);
-    if io::FrameStream::supports(out, dir) {
-        return 0;
-    }
-    24 + match io::Format::from_path(out) {
-        Some(io::Format::Glb | io::Format::Gltf) => 24,
-        Some(io::Format::Usda) => 40,
-        _ => 0,
-    }
-}
-
-/// Refuses, before any solve, an animation whose frames would not fit in `max_gib` GiB
-/// (frames × vertices × [`bytes_per_frame_vertex`]), naming the estimate.
-pub(super) fn check_frames_memory(
-    out: &Path,
-    frames: usize,
-    vertices: usize,
-    max_gib: f64,
-) -> anyhow::Result<()> {
-    let per = bytes_per_frame_vertex(out);
-    let bytes = (frames as u64)
-        .saturating_mul(vertices as u64)
-        .saturating_mul(per);
-    let gib = bytes as f64 / (1u64 << 30) as f64;
-    if gib > max_gib {
-        bail!(
-            "{}: {frames} frames of {vertices} vertices would hold about {gib:.1} GiB in memory ({per} bytes per vertex and frame), over the limit of {max_gib} GiB (--max-memory); write fewer frames per run (split the weights file), or raise --max-memory",
-            out.display()
-        );
-    }
-    Ok(())
-}
-
-pub(super) fn weights_json(w: &Weights) -> serde_json::Value {
-    match w {
-        Weights::Alpha(a) => json!({ "alpha": a }),
-        Weights::Convex(v) => json!({ "convex": v }),
-        Weights::Delta(v) => json!({ "delta": v }),
-    }
-}
-
-/// `OUT-WHAT.ply` beside `out` (`OUT` the file name up to its first dot).
-fn region_path(out: &Path, what: &str) -> PathBuf {
-    let stem = out
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "blend".into());
-    let stem = stem.split('.').next().unwrap_or("blend").to_string();
-    out.with_file_name(format!("{stem}-{what}.ply"))
-}
-
-/// `OUT-unconverged.ply` beside `out`.
-pub(super) fn unconverged_path(out: &Path) -> PathBuf {
-    region_path(out, "unconverged")
-}
-
-/// `OUT-jumps.ply` beside `out`: the vertices of jumps between frames.
-pub(super) fn jumps_path(out: &Path) -> PathBuf {
-    region_path(out, "jumps")
-}
-
-/// Writes `base` to `path` with the vertices flagged in `region` red, the others grey.
-pub(super) fn write_region(
-    outputs: &mut Outputs,
-    path: &Path,
-    base: &morphkit::mesh::TriMesh,
-    region: &[bool],
-) -> anyhow::Result<()> {
-    let colors = region
-        .iter()
-        .map(|&f| if f { [220, 30, 30] } else { [200, 200, 200] })
-        .collect();
-    outputs.colored_ply(path, base, &io::Colors::PerVertex(colors))
-}
-
-/// Warns about the jumps of a sequence (a part that snapped from one equilibrium to another
-/// between two frames, see `morphkit::springs::continuity`) and writes their vertices, red on
-/// the base mesh, to [`jumps_path`]. Returns that path when anything jumped.
-pub(super) fn report_jumps(
-    outputs: &mut Outputs,
-    out: &Path,
-    base: &morphkit::mesh::TriMesh,
-    continuity: &Continuity,
-) -> anyhow::Result<Option<PathBuf>> {
-    let Some(first) = continuity.jumps.first() else {
-        return Ok(None);
-    };
-    let worst = continuity
-        .jumps
-        .iter()
-        .max_by(|a, b| a.ratio.total_cmp(&b.ratio))
-        .unwrap_or(first);
-    let region = continuity.jump_vertices();
-    let path = jumps_path(out);
-    eprintln!(
-        "warning: a part jumped between {} pair(s) of consecutive frames (first: frames {}→{}; worst: frames {}→{}, {} vertices moving up to {:.1}× the linear blend's step, bound {}); the spring energy has two equilibria there and the frames pass from one to the other. {} vertices shown red in {}; try --hinge-weight 1 (see the README, \"Jumps between frames\")",
-        continuity.jumps.len(),
-        first.frames[0],
-        first.frames[1],
-        worst.frames[0],
-        worst.frames[1],
-        worst.vertices.len(),
-        worst.ratio,
-        continuity.bound,
-        region.len(),
-        path.display()
-    );
-    let mut flagged = vec![false; base.positions.len()];
-    for &v in &region {
-        flagged[v as usize] = true;
-    }
-    write_region(outputs, &path, base, &flagged)?;
-    Ok(Some(path))
-}
-
 /// Solves every frame (`None` per frame for the linear blend), in parallel chunks so that the
 /// progress bar moves.
 fn solve_frames(
@@ -444,6 +259,18 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     }
     check_frames_memory(&a.out, weights.len(), shapes.num_vertices(), a.max_memory)?;
     let topology = Topology::new(shapes.num_vertices(), shapes.triangles());
+    // Split seams and hard edges are one vertex for the solve (mesh::weld); results go back in
+    // the input's layout.
+    let weld = (!a.linear).then(|| Weld::of_shapes(&shapes, WELD_TOLERANCE));
+    let weld = weld.unwrap_or_else(|| Weld::identity(shapes.num_vertices()));
+    if !weld.is_identity() {
+        eprintln!(
+            "welded {} split vertices (seams, hard edges) into the {} they share a position with in every shape; the result keeps the input's {} vertices",
+            weld.merged(),
+            weld.num_welded(),
+            weld.num_input()
+        );
+    }
     let options = BlendOptions {
         springs: SpringOptions {
             k0: a.k0,
@@ -454,7 +281,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
             weight: a.hinge_weight,
             ..Default::default()
         },
-        fixed: read_fixed(&a.fixed)?,
+        fixed: welded_fixed(read_fixed(&a.fixed)?, &weld, Path::new(&a.fixed))?,
         gradient_tolerance: a.tolerance,
         kinematic_stretch: a.kinematic_stretch,
         tether: a.tether,
@@ -478,7 +305,15 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     };
     let threads = threads(a);
     if super::volume::requested(a) {
-        return super::volume::run(a, &shapes, &weights, &options, threads, start, outputs);
+        return super::volume::run(
+            a,
+            (&shapes, &weld),
+            &weights,
+            &options,
+            threads,
+            start,
+            outputs,
+        );
     }
     if !a.linear {
         crate::util::announce_work("setting up the physical blend", shapes.num_vertices());
@@ -487,7 +322,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let mut solver = if a.linear {
         None
     } else {
-        Some(PhysicalBlend::new(&shapes, &options)?)
+        Some(PhysicalBlend::new(&weld.shapes(&shapes)?, &options)?)
     };
     let setup_seconds = t_setup.elapsed().as_secs_f64();
 
@@ -525,21 +360,19 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
                 Some(r) => {
                     if !r.stats.converged {
                         unconverged.push(k);
-                        for &v in &r.stats.unconverged_vertices {
-                            failed[v as usize] = true;
-                        }
+                        mark_failed(&mut failed, &weld, &r.stats.unconverged_vertices);
                     }
                     if r.stats.clamped_springs > 0 {
                         clamped.push((k, r.stats.clamped_springs));
                     }
+                    let positions = weld.scatter(&r.positions);
                     if a.report.is_some() {
-                        row["physical"] =
-                            json!(blend_metrics(&shapes, &topology, w, &r.positions)?);
-                        row["folds"] = json!(fold_metrics(&shapes, &topology, w, &r.positions)?);
+                        row["physical"] = json!(blend_metrics(&shapes, &topology, w, &positions)?);
+                        row["folds"] = json!(fold_metrics(&shapes, &topology, w, &positions)?);
                     }
                     row["solver"] = json!(r.stats);
-                    steps.push(&r.positions, &linear)?;
-                    r.positions
+                    steps.push(&positions, &linear)?;
+                    positions
                 }
             };
             if positions.iter().flatten().any(|v| !v.is_finite()) {
@@ -607,6 +440,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
             "output": a.out.display().to_string(),
             "vertices": shapes.num_vertices(),
             "triangles": shapes.triangles().len(),
+            "welded_vertices": weld.merged(),
             "springs": solver.as_ref().map(|s| s.summary().springs),
             "rig": solver.as_ref().map(|s| s.summary().clone()),
             "free_dofs": solver.as_ref().map(|s| s.num_free_dofs()),

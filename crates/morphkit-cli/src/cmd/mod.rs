@@ -8,6 +8,8 @@ pub mod bench_synth;
 pub mod bench_transfer;
 pub mod bench_volume;
 pub mod blend;
+pub mod blend_inputs;
+pub mod blend_outputs;
 pub mod convert;
 pub mod corr_args;
 pub mod correspond;

@@ -18,7 +18,7 @@ use crate::outputs::Outputs;
 use crate::util::progress;
 use anyhow::{bail, Context};
 use morphkit::io::{self, FramesOptions};
-use morphkit::mesh::{ShapeSet, Topology};
+use morphkit::mesh::{ShapeSet, Topology, Weld};
 use morphkit::springs::interior::VolumeResult;
 use morphkit::springs::{
     blend_metrics, AnchorOptions, BlendOptions, InteriorOptions, VolumetricBlend, Weights,
@@ -47,7 +47,7 @@ pub fn requested(a: &BlendArgs) -> bool {
 /// Runs the volumetric blend of `morphkit blend` and writes its outputs.
 pub fn run(
     a: &BlendArgs,
-    shapes: &ShapeSet,
+    (shapes, weld): (&ShapeSet, &Weld),
     weights: &[Weights],
     options: &BlendOptions,
     threads: usize,
@@ -62,7 +62,7 @@ pub fn run(
     let mut inputs: Vec<std::path::PathBuf> = a.base.iter().cloned().collect();
     inputs.extend(a.targets.iter().cloned());
     let t_setup = Instant::now();
-    let mut solver = VolumetricBlend::new(shapes, options, &interior, &anchor)?;
+    let mut solver = VolumetricBlend::new(&weld.shapes(shapes)?, options, &interior, &anchor)?;
     let setup_seconds = t_setup.elapsed().as_secs_f64();
     let rep = solver.report().clone();
     for s in &rep.skipped {
@@ -90,12 +90,11 @@ pub fn run(
         shapes.base().bbox_diagonal(),
     );
     let (mut worst_tets, mut worst_tris) = (0, 0);
-    for (k, (w, r)) in weights.iter().zip(results).enumerate() {
+    for (k, (w, mut r)) in weights.iter().zip(results).enumerate() {
+        r.positions = weld.scatter(&r.positions);
         if !r.stats.converged {
             unconverged.push(k);
-            for &v in &r.stats.unconverged_vertices {
-                failed[v as usize] = true;
-            }
+            super::blend::mark_failed(&mut failed, weld, &r.stats.unconverged_vertices);
         }
         worst_tets = worst_tets.max(r.inversions.tetrahedra);
         worst_tris = worst_tris.max(r.inversions.triangles);
@@ -153,6 +152,7 @@ pub fn run(
             "inputs": inputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
             "output": a.out.display().to_string(),
             "vertices": shapes.num_vertices(),
+            "welded_vertices": weld.merged(),
             "triangles": shapes.triangles().len(),
             "interior": rep,
             "rig": solver.physical().summary(),

@@ -135,9 +135,31 @@ pub(crate) fn check_fits_f32(
                 positions[v]
             ),
         )),
-        None => Ok(()),
+        None => {
+            // A mesh whose every coordinate is below single precision's normal range (a
+            // denormal 1e-310 mesh) would be stored as one point.
+            let largest = positions
+                .iter()
+                .flatten()
+                .fold(0.0f64, |m, x| m.max(x.abs()));
+            if largest > 0.0 && largest < F32_SMALLEST_SIZE {
+                return Err(IoError::content(
+                    path,
+                    format!(
+                        "{what}: every coordinate is below {F32_SMALLEST_SIZE:e} in size (the \
+                         largest is {largest:e}), which single precision would store as one \
+                         point; rescale the mesh or write .obj or .ply"
+                    ),
+                ));
+            }
+            Ok(())
+        }
     }
 }
+
+/// The smallest largest-coordinate a mesh may have in an `f32` format: about 2²³ times `f32`'s
+/// smallest normal number, so that the mesh keeps its 24 bits of precision.
+const F32_SMALLEST_SIZE: f64 = 1e-30;
 
 /// Canonical form of a path that may not exist yet: its existing parent canonicalized, plus
 /// the file name.

@@ -195,6 +195,15 @@ mod fuzz_regressions {
         assert!(e.contains("sample 1: vertex 0"), "{e}");
         assert!(e.contains("not representable as f32"), "{e}");
         assert!(!p.exists());
+        // A denormal mesh would collapse to one point in single precision.
+        let cache = PointCache {
+            start_frame: 0.0,
+            sample_rate: 1.0,
+            samples: vec![vec![[1e-310, 0.0, 0.0], [0.0, 2e-310, 0.0]]],
+        };
+        let e = write_pc2(&p, &cache).unwrap_err().to_string();
+        assert!(e.contains("sample 0: every coordinate is below"), "{e}");
+        assert!(!p.exists());
     }
 
     /// Found by `cargo fuzz` (target `pc2`): counts whose product overflowed the size check.

@@ -12,10 +12,12 @@ pub mod generate;
 mod shape_set;
 mod topology;
 mod validate;
+mod weld;
 
 pub use shape_set::{ShapeSet, ShapeSetError};
 pub use topology::{Adjacency, Topology};
 pub use validate::{validate, MeshError, ValidationReport, ValidationWarning};
+pub use weld::{Weld, WELD_TOLERANCE};
 
 /// A point or vector in 3-space.
 pub type Point = [f64; 3];

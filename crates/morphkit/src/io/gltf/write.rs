@@ -253,6 +253,7 @@ pub(super) fn build_with(
         ..GltfSummary::default()
     };
     let mut b = Builder::default();
+    crate::io::atomic::check_fits_f32(path, "base", &m.base.positions)?;
     let base = to_f32(path, "base", &m.base.positions, None)?;
     let pos = b.vec3(&base);
     let indices = b.triangle_indices(&m.base);

@@ -1,0 +1,243 @@
+//! Issue 37 (artists' own assets): vertices split at seams and hard edges are one vertex for
+//! the solve, and the result comes back in the input's own layout, equal to the unsplit one.
+
+mod common;
+use common::*;
+use std::path::{Path, PathBuf};
+
+type Mesh = (Vec<[f64; 3]>, Vec<Vec<usize>>);
+
+fn read(p: &Path) -> Mesh {
+    let text = std::fs::read_to_string(p).unwrap();
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    for l in text.lines() {
+        let t: Vec<&str> = l.split_whitespace().collect();
+        match t.first() {
+            Some(&"v") => v.push([t[1], t[2], t[3]].map(|x| x.parse().unwrap())),
+            Some(&"f") => f.push(
+                t[1..]
+                    .iter()
+                    .map(|x| x.split('/').next().unwrap().parse::<usize>().unwrap() - 1)
+                    .collect(),
+            ),
+            _ => {}
+        }
+    }
+    (v, f)
+}
+
+fn write(p: &Path, (v, f): &Mesh) {
+    let mut s = String::new();
+    for q in v {
+        s += &format!("v {} {} {}\n", q[0], q[1], q[2]);
+    }
+    for t in f {
+        s += "f";
+        for i in t {
+            s += &format!(" {}", i + 1);
+        }
+        s += "\n";
+    }
+    std::fs::write(p, s).unwrap();
+}
+
+/// Splits the meshes `shapes` (one connectivity) as an exporter does at a UV seam: the faces
+/// whose base centroid has y > 0 take copies of the vertices they share with the others;
+/// with `shuffle`, the vertices are also reordered. Returns the split meshes and, for each
+/// split vertex, its vertex in the unsplit mesh.
+fn split(shapes: &[Mesh], shuffle: bool) -> (Vec<Mesh>, Vec<usize>) {
+    let (v0, f) = &shapes[0];
+    let upper: Vec<bool> = f
+        .iter()
+        .map(|t| t.iter().map(|&i| v0[i][1]).sum::<f64>() > 0.0)
+        .collect();
+    let n = v0.len();
+    let (mut a, mut b) = (vec![false; n], vec![false; n]);
+    for (t, &u) in f.iter().zip(&upper) {
+        for &i in t {
+            if u {
+                a[i] = true
+            } else {
+                b[i] = true
+            }
+        }
+    }
+    let seam: Vec<usize> = (0..n).filter(|&i| a[i] && b[i]).collect();
+    assert!(seam.len() > 10, "the split must cut a seam");
+    let mut copy = vec![usize::MAX; n];
+    for (k, &v) in seam.iter().enumerate() {
+        copy[v] = n + k;
+    }
+    let mut origin: Vec<usize> = (0..n).chain(seam.iter().copied()).collect();
+    let mut order: Vec<usize> = (0..origin.len()).collect();
+    if shuffle {
+        // A fixed LCG permutation: exporters interleave the copies.
+        let mut x: u64 = 12345;
+        for i in (1..order.len()).rev() {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            order.swap(i, (x >> 33) as usize % (i + 1));
+        }
+    }
+    let mut new_index = vec![0; order.len()];
+    for (k, &o) in order.iter().enumerate() {
+        new_index[o] = k;
+    }
+    let faces: Vec<Vec<usize>> = f
+        .iter()
+        .zip(&upper)
+        .map(|(t, &u)| {
+            t.iter()
+                .map(|&i| {
+                    new_index[if u && copy[i] != usize::MAX {
+                        copy[i]
+                    } else {
+                        i
+                    }]
+                })
+                .collect()
+        })
+        .collect();
+    let meshes = shapes
+        .iter()
+        .map(|(v, _)| {
+            let all: Vec<[f64; 3]> = origin.iter().map(|&o| v[o]).collect();
+            (order.iter().map(|&o| all[o]).collect(), faces.clone())
+        })
+        .collect();
+    origin = order.iter().map(|&o| origin[o]).collect();
+    (meshes, origin)
+}
+
+fn diagonal(v: &[[f64; 3]]) -> f64 {
+    let mut d = 0.0;
+    for k in 0..3 {
+        let lo = v.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+        let hi = v.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+        d += (hi - lo) * (hi - lo);
+    }
+    f64::sqrt(d)
+}
+
+/// Blends `base` → `target` at α = ½, unsplit and split (appended and shuffled copies), and
+/// returns the largest distance of a split result's vertex from its unsplit vertex, over the
+/// diagonal, for (appended, shuffled); also checks the report's welded count.
+fn split_against_unsplit(d: &Path, base: &Path, target: &Path) -> (f64, f64) {
+    let reference = d.join("ref.obj");
+    ok(&blend_args(
+        base,
+        target,
+        &["--alpha", "0.5", "--out", s(&reference)],
+    ));
+    let unsplit = read(&reference).0;
+    let diag = diagonal(&read(base).0);
+    let mut errs = Vec::new();
+    for shuffle in [false, true] {
+        let (meshes, origin) = split(&[read(base), read(target)], shuffle);
+        let (b, t): (PathBuf, PathBuf) = (d.join("b.obj"), d.join("t.obj"));
+        write(&b, &meshes[0]);
+        write(&t, &meshes[1]);
+        let out = d.join("split.obj");
+        let report = d.join("r.json");
+        let (_, err) = run_ok(&blend_args(
+            &b,
+            &t,
+            &["--alpha", "0.5", "--out", s(&out), "--report", s(&report)],
+        ));
+        let welded = origin.len() - unsplit.len();
+        assert!(
+            err.contains(&format!("welded {welded} split vertices")),
+            "{err}"
+        );
+        let r: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        assert_eq!(r["welded_vertices"], welded);
+        let got = read(&out);
+        assert_eq!(got.1, meshes[0].1, "the output keeps the input's faces");
+        let e = got
+            .0
+            .iter()
+            .zip(&origin)
+            .map(|(p, &o)| {
+                let q = unsplit[o];
+                ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+            })
+            .fold(0.0, f64::max);
+        errs.push(e / diag);
+    }
+    (errs[0], errs[1])
+}
+
+#[test]
+fn a_seam_split_tube_blends_as_the_unsplit_one() {
+    let d = tmp_dir("weld-tube");
+    let (a, b) = (d.join("a.obj"), d.join("bent.obj"));
+    write_tube(&a, 24, 16, 1.0, 0.0);
+    write_tube(&b, 24, 16, 1.0, 2.0);
+    let (appended, shuffled) = split_against_unsplit(&d, &a, &b);
+    assert_eq!(
+        appended, 0.0,
+        "copies after their originals weld to the same mesh"
+    );
+    assert!(shuffled < 1e-9, "{shuffled}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn vertices_that_part_in_a_target_are_not_welded() {
+    let d = tmp_dir("weld-part");
+    let (a, b) = (d.join("a.obj"), d.join("bent.obj"));
+    write_tube(&a, 24, 16, 1.0, 0.0);
+    write_tube(&b, 24, 16, 1.0, 2.0);
+    let (mut meshes, _) = split(&[read(&a), read(&b)], false);
+    // Move every copy in the target: the seam opens there, so nothing is welded.
+    let n = read(&a).0.len();
+    for p in &mut meshes[1].0[n..] {
+        p[0] += 0.05;
+    }
+    let (sb, st) = (d.join("sb.obj"), d.join("st.obj"));
+    write(&sb, &meshes[0]);
+    write(&st, &meshes[1]);
+    let report = d.join("r.json");
+    let (_, err) = run_ok(&blend_args(
+        &sb,
+        &st,
+        &[
+            "--alpha",
+            "0.5",
+            "--out",
+            s(&d.join("o.obj")),
+            "--report",
+            s(&report),
+        ],
+    ));
+    assert!(!err.contains("welded"), "{err}");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(r["welded_vertices"], 0);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn a_seam_split_real_cylinder_blends_as_the_unsplit_one() {
+    let Some(data) = std::env::var_os("MORPHKIT_DATA") else {
+        eprintln!("SKIPPED: MORPHKIT_DATA is not set");
+        return;
+    };
+    let cyl = Path::new(&data).join("cragl-bending-cylinder");
+    let (base, target) = (
+        cyl.join("cylinder-rest.obj"),
+        cyl.join("cylinder-bend-4.obj"),
+    );
+    assert!(
+        base.exists() && target.exists(),
+        "{} is missing",
+        cyl.display()
+    );
+    let d = tmp_dir("weld-cylinder");
+    let (appended, shuffled) = split_against_unsplit(&d, &base, &target);
+    assert_eq!(appended, 0.0);
+    assert!(shuffled < 1e-9, "{shuffled}");
+    let _ = std::fs::remove_dir_all(&d);
+}

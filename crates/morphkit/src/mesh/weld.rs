@@ -1,0 +1,241 @@
+//! Welding the split vertices of exported meshes for a solve, and scattering results back.
+//!
+//! Exporters (Blender, Maya, glTF tools) split a vertex wherever a UV seam, a hard edge or a
+//! material border passes: two or more vertices at one position, each used by the triangles on
+//! its side. A solver that takes them as separate vertices solves each piece on its own and the
+//! mesh tears open along every seam. [`Weld::of_shapes`] finds the vertices that coincide in
+//! *every* shape of a rig (within [`WELD_TOLERANCE`] of the base's bounding-box diagonal) and
+//! makes them one; vertices that touch in one shape and part in another (lips closed at rest)
+//! stay apart. [`Weld::shapes`] gives the welded rig to solve on and [`Weld::scatter`] writes a
+//! welded result back in the input's own vertex layout and order, so seams never open.
+//!
+//! The welded numbering keeps the input's order of first occurrence: a mesh whose duplicates
+//! all follow their originals welds to exactly the unsplit mesh, and solves to the same bits.
+
+use super::{bbox_diagonal, Point, ShapeSet, ShapeSetError, TriMesh};
+use std::collections::HashMap;
+
+/// Vertices closer than this fraction of the base's bounding-box diagonal, in every shape,
+/// are welded: far below any modelled detail, above `f32` round-off of exported positions
+/// (2⁻²⁴ ≈ 6e-8 relative).
+pub const WELD_TOLERANCE: f64 = 1e-6;
+
+/// Which input vertices are one vertex for a solve; see the module docs.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Weld {
+    /// The welded vertex of each input vertex (`#V_in`).
+    to_welded: Vec<u32>,
+    /// The first input vertex of each welded vertex (`#V_welded`).
+    representative: Vec<u32>,
+}
+
+impl Weld {
+    /// The identity on `n` vertices (nothing welded).
+    pub fn identity(n: usize) -> Self {
+        Self {
+            to_welded: (0..n as u32).collect(),
+            representative: (0..n as u32).collect(),
+        }
+    }
+
+    /// Welds the vertices of `shapes` that coincide in every shape within
+    /// `tolerance × diagonal` of the base ([`WELD_TOLERANCE`] is the default). Groups are
+    /// transitive: a chain of close vertices is one vertex.
+    pub fn of_shapes(shapes: &ShapeSet, tolerance: f64) -> Self {
+        let n = shapes.num_vertices();
+        let base = shapes.positions(0);
+        let tol = tolerance * bbox_diagonal(base);
+        if n == 0 || !(tol > 0.0) || !tol.is_finite() {
+            return Self::identity(n);
+        }
+        // Cells of side `tol`: a close pair lies in the same or a neighbouring cell.
+        let cell = |p: &Point| p.map(|x| (x / tol).floor() as i64);
+        let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        for (v, p) in base.iter().enumerate() {
+            grid.entry(cell(p)).or_default().push(v as u32);
+        }
+        let close = |a: usize, b: usize| {
+            shapes.all_positions().iter().all(|s| {
+                let (p, q) = (s[a], s[b]);
+                let d2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
+                d2 <= tol * tol
+            })
+        };
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn find(parent: &mut [u32], mut v: u32) -> u32 {
+            while parent[v as usize] != v {
+                parent[v as usize] = parent[parent[v as usize] as usize];
+                v = parent[v as usize];
+            }
+            v
+        }
+        for (v, p) in base.iter().enumerate() {
+            let c = cell(p);
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        let Some(others) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
+                            continue;
+                        };
+                        for &w in others {
+                            if (w as usize) <= v || !close(v, w as usize) {
+                                continue;
+                            }
+                            let (a, b) = (find(&mut parent, v as u32), find(&mut parent, w));
+                            // The smaller root stays: the group's first vertex represents it.
+                            if a < b {
+                                parent[b as usize] = a;
+                            } else if b < a {
+                                parent[a as usize] = b;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let mut to_welded = vec![u32::MAX; n];
+        let mut representative = Vec::new();
+        for v in 0..n {
+            let r = find(&mut parent, v as u32) as usize;
+            if to_welded[r] == u32::MAX {
+                to_welded[r] = representative.len() as u32;
+                representative.push(r as u32);
+            }
+            to_welded[v] = to_welded[r];
+        }
+        Self {
+            to_welded,
+            representative,
+        }
+    }
+
+    /// Input vertices.
+    pub fn num_input(&self) -> usize {
+        self.to_welded.len()
+    }
+
+    /// Welded vertices.
+    pub fn num_welded(&self) -> usize {
+        self.representative.len()
+    }
+
+    /// How many input vertices were merged into others (`#V_in − #V_welded`).
+    pub fn merged(&self) -> usize {
+        self.num_input() - self.num_welded()
+    }
+
+    /// True when nothing was welded.
+    pub fn is_identity(&self) -> bool {
+        self.merged() == 0
+    }
+
+    /// The welded vertex of each input vertex.
+    pub fn to_welded(&self) -> &[u32] {
+        &self.to_welded
+    }
+
+    /// `mesh`'s triangles in welded numbering; triangles that lose a corner to the weld (they
+    /// had no area in any shape) are left out.
+    pub fn triangles(&self, triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+        triangles
+            .iter()
+            .map(|t| t.map(|v| self.to_welded[v as usize]))
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
+            .collect()
+    }
+
+    /// Welded positions: each welded vertex at its first input vertex.
+    pub fn gather(&self, positions: &[Point]) -> Vec<Point> {
+        self.representative
+            .iter()
+            .map(|&v| positions[v as usize])
+            .collect()
+    }
+
+    /// A welded result written back in the input's layout: every input vertex at its welded
+    /// vertex's position (`#V_welded` in, `#V_in` out).
+    pub fn scatter(&self, welded: &[Point]) -> Vec<Point> {
+        self.to_welded.iter().map(|&w| welded[w as usize]).collect()
+    }
+
+    /// The welded rig: the base with welded triangles and every shape gathered, names kept.
+    pub fn shapes(&self, shapes: &ShapeSet) -> Result<ShapeSet, ShapeSetError> {
+        if self.is_identity() {
+            return Ok(shapes.clone());
+        }
+        let base = TriMesh::new(
+            self.gather(shapes.positions(0)),
+            self.triangles(shapes.triangles()),
+        );
+        let frames = (0..shapes.len())
+            .map(|s| (shapes.name(s).to_string(), self.gather(shapes.positions(s))))
+            .collect();
+        ShapeSet::new(base, frames)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    /// `m` with the vertices of `split` duplicated at the end, the triangles in `uses` using
+    /// the copies: a seam as exporters write it.
+    fn split(m: &TriMesh, split: &[u32]) -> TriMesh {
+        let mut p = m.positions.clone();
+        let mut tris = m.triangles.clone();
+        for &v in split {
+            p.push(m.positions[v as usize]);
+            let copy = (p.len() - 1) as u32;
+            // Every other triangle around v takes the copy.
+            let mut k = 0;
+            for t in tris.iter_mut() {
+                if let Some(c) = t.iter().position(|&x| x == v) {
+                    if k % 2 == 1 {
+                        t[c] = copy;
+                    }
+                    k += 1;
+                }
+            }
+        }
+        TriMesh::new(p, tris)
+    }
+
+    #[test]
+    fn split_vertices_weld_back_to_the_unsplit_mesh() {
+        let m = generate::grid(6, 5, 1.0, 1.0);
+        let seam: Vec<u32> = (7..12).collect();
+        let s = split(&m, &seam);
+        let bent = generate::bend(&s.positions, 0.5, 0.5, 1.0);
+        let shapes = ShapeSet::new(
+            s.clone(),
+            vec![("a".into(), s.positions.clone()), ("b".into(), bent)],
+        )
+        .unwrap();
+        let w = Weld::of_shapes(&shapes, WELD_TOLERANCE);
+        assert_eq!(w.merged(), seam.len());
+        let welded = w.shapes(&shapes).unwrap();
+        assert_eq!(welded.base().positions, m.positions);
+        assert_eq!(welded.triangles(), &m.triangles[..]);
+        // Scatter puts every copy where its original is.
+        let back = w.scatter(welded.positions(1));
+        assert_eq!(back, shapes.positions(1));
+    }
+
+    #[test]
+    fn vertices_that_part_in_one_shape_stay_apart() {
+        let m = generate::grid(4, 4, 1.0, 1.0);
+        let s = split(&m, &[5]);
+        let mut parted = s.positions.clone();
+        let last = parted.len() - 1;
+        parted[last][2] += 0.1;
+        let shapes = ShapeSet::new(
+            s.clone(),
+            vec![("a".into(), s.positions.clone()), ("b".into(), parted)],
+        )
+        .unwrap();
+        let w = Weld::of_shapes(&shapes, WELD_TOLERANCE);
+        assert!(w.is_identity());
+        assert_eq!(w.shapes(&shapes).unwrap().num_vertices(), s.num_vertices());
+    }
+}
