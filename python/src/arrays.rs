@@ -2,8 +2,9 @@
 //! triangles `F` as `(m, 3)` integers, sequences of frames as `(k, n, 3) float64`.
 //!
 //! Any strided array is read through a view (no copy on the Python side); `float32` vertices
-//! and any integer dtype for faces are accepted and converted. Everything else is a
-//! `MeshError` naming the argument, its dtype or shape, and the offending row.
+//! and any integer dtype for faces (signed or unsigned, 8 to 64 bits) are accepted and
+//! converted. Everything else is a `MeshError` naming the argument, its dtype or shape, and
+//! the offending row.
 
 use crate::errors::{new_err, Kind};
 use morphkit::mesh::Point;
@@ -70,7 +71,7 @@ pub fn points(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<Point>> {
     ))
 }
 
-fn check_faces<T: Copy + TryInto<u32> + std::fmt::Display>(
+fn check_faces<T: Copy + Into<i128>>(
     name: &str,
     view: ArrayView2<'_, T>,
     num_vertices: Option<usize>,
@@ -84,49 +85,65 @@ fn check_faces<T: Copy + TryInto<u32> + std::fmt::Display>(
             ),
         ));
     }
+    let limit = num_vertices.map_or(i128::from(u32::MAX) + 1, |n| n as i128);
     let mut out = Vec::with_capacity(view.nrows());
     for (f, r) in view.outer_iter().enumerate() {
         let mut t = [0u32; 3];
         for k in 0..3 {
-            let bad = || {
-                new_err(
+            let i: i128 = r[k].into();
+            if i < 0 {
+                return Err(new_err(
+                    Kind::Mesh,
+                    format!("{name}: face {f} has a negative vertex index {i}"),
+                ));
+            }
+            if i >= limit {
+                return Err(new_err(
                     Kind::Mesh,
                     format!(
-                        "{name}: face {f} has vertex index {} out of range{}",
-                        r[k],
+                        "{name}: face {f} has vertex index {i} out of range{}",
                         num_vertices.map_or(String::new(), |n| format!(" (0..{n})"))
                     ),
-                )
-            };
-            let i: u32 = r[k].try_into().map_err(|_| bad())?;
-            if num_vertices.is_some_and(|n| i as usize >= n) {
-                return Err(bad());
+                ));
             }
-            t[k] = i;
+            t[k] = u32::try_from(i).expect("checked below the limit");
         }
         out.push(t);
     }
     Ok(out)
 }
 
-/// Reads an `(m, 3)` integer array of vertex indices, each in `0..num_vertices`.
+/// `check_faces` of `obj` read as an `(m, 3)` array of each integer dtype in turn.
+macro_rules! faces_of {
+    ($name:expr, $obj:expr, $n:expr, $($t:ty),+) => {
+        $(
+            if let Ok(a) = $obj.extract::<PyReadonlyArray2<'_, $t>>() {
+                return check_faces($name, a.as_array(), $n);
+            }
+        )+
+    };
+}
+
+/// Reads an `(m, 3)` array of vertex indices of any integer dtype (signed or unsigned, 8 to 64
+/// bits), each in `0..num_vertices`; negative indices are refused.
 pub fn faces(
     name: &str,
     obj: &Bound<'_, PyAny>,
     num_vertices: Option<usize>,
 ) -> PyResult<Vec<[u32; 3]>> {
-    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, i64>>() {
-        return check_faces(name, a.as_array(), num_vertices);
-    }
-    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, i32>>() {
-        return check_faces(name, a.as_array(), num_vertices);
-    }
-    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, u32>>() {
-        return check_faces(name, a.as_array(), num_vertices);
-    }
-    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, u64>>() {
-        return check_faces(name, a.as_array(), num_vertices);
-    }
+    faces_of!(
+        name,
+        obj,
+        num_vertices,
+        i64,
+        i32,
+        u32,
+        u64,
+        i16,
+        u16,
+        i8,
+        u8
+    );
     Err(new_err(
         Kind::Mesh,
         format!(
