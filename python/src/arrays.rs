@@ -10,10 +10,11 @@ use crate::errors::{new_err, Kind};
 use morphkit::mesh::Point;
 use numpy::ndarray::{Array2, Array3, ArrayView2};
 use numpy::{
-    IntoPyArray, PyArray2, PyArray3, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArray,
-    PyUntypedArrayMethods,
+    IntoPyArray, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
+    PyUntypedArray, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
+use pyo3::types::PyString;
 
 fn describe(obj: &Bound<'_, PyAny>) -> String {
     match obj.cast::<PyUntypedArray>() {
@@ -151,6 +152,49 @@ pub fn faces(
             describe(obj)
         ),
     ))
+}
+
+/// Reads one number per element (a 1-D array of a real dtype, or a sequence of numbers)
+/// of length `len` (`what` says what the entries are for, in messages), each finite and
+/// `≥ 0`; the first bad entry is named by its index.
+pub fn non_negative(
+    name: &str,
+    obj: &Bound<'_, PyAny>,
+    len: usize,
+    what: &str,
+) -> PyResult<Vec<f64>> {
+    let v: Vec<f64> = if let Ok(a) = obj.extract::<PyReadonlyArray1<'_, f64>>() {
+        a.as_array().to_vec()
+    } else if let Ok(a) = obj.extract::<PyReadonlyArray1<'_, f32>>() {
+        a.as_array().iter().map(|&x| f64::from(x)).collect()
+    } else {
+        let not_numbers = || {
+            new_err(
+                Kind::Mesh,
+                format!(
+                    "{name}: expected a float64 array of shape ({len},), {what}, got {}",
+                    describe(obj)
+                ),
+            )
+        };
+        if obj.is_instance_of::<PyString>() {
+            return Err(not_numbers());
+        }
+        obj.extract().map_err(|_| not_numbers())?
+    };
+    if v.len() != len {
+        return Err(new_err(
+            Kind::Mesh,
+            format!("{name}: has {} entries, expected {len} ({what})", v.len()),
+        ));
+    }
+    if let Some(i) = v.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
+        return Err(new_err(
+            Kind::Mesh,
+            format!("{name}[{i}] = {} is not a finite number ≥ 0", v[i]),
+        ));
+    }
+    Ok(v)
 }
 
 /// Reads frames: a `(k, n, 3)` float array or a sequence of `(n, 3)` arrays. Each frame must

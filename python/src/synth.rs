@@ -65,19 +65,25 @@ fn mask_of(name: &str, obj: &Bound<'_, PyAny>, len: usize) -> PyResult<Vec<bool>
 
 #[pymethods]
 impl PyPartitions {
+    /// `flexibility`: one finite value ≥ 0 per triangle of `f` (as :func:`flexibility`
+    /// returns); anything else is a :class:`MeshError` naming the first bad entry.
     #[new]
     #[pyo3(signature = (v, f, flexibility, *, gamma=GAMMA))]
     fn new(
         v: &Bound<'_, PyAny>,
         f: &Bound<'_, PyAny>,
-        flexibility: Vec<f64>,
+        flexibility: &Bound<'_, PyAny>,
         gamma: f64,
     ) -> PyResult<Self> {
         let mesh = from_arrays("target", v, f)?;
+        let values = arrays::non_negative(
+            "flexibility",
+            flexibility,
+            mesh.num_triangles(),
+            "one per triangle of F",
+        )?;
         let topology = Topology::new(mesh.num_vertices(), &mesh.triangles);
-        let flex = Flexibility {
-            values: flexibility,
-        };
+        let flex = Flexibility { values };
         let inner = Partitions::new(&flex, &topology, gamma).py(Kind::Transfer)?;
         Ok(Self {
             inner,
