@@ -1,6 +1,7 @@
 //! `PhysicalBlend`: the library's stateful physical-blendshape solver (Ma et al. 2012), built
 //! once per rig, then solved for many weight vectors with the GIL released.
 
+use crate::args::{self, Elements};
 use crate::arrays::{self, to_array, to_array3};
 use crate::dict::to_dict;
 use crate::errors::{new_err, IntoPyResult, Kind};
@@ -31,7 +32,9 @@ pub struct PyPhysicalBlend {
     last: Option<FrameStats>,
 }
 
-pub fn fixed_vertices(obj: Option<&Bound<'_, PyAny>>) -> PyResult<FixedVertices> {
+/// `fixed` as given to the constructors: `None` or `"auto"`, `"none"`, or vertex ids of a
+/// mesh of `vertices` vertices.
+pub fn fixed_vertices(obj: Option<&Bound<'_, PyAny>>, vertices: usize) -> PyResult<FixedVertices> {
     let Some(obj) = obj else {
         return Ok(FixedVertices::Auto);
     };
@@ -45,19 +48,7 @@ pub fn fixed_vertices(obj: Option<&Bound<'_, PyAny>>) -> PyResult<FixedVertices>
             )),
         };
     }
-    let ids: Vec<i64> = obj.extract().map_err(|_| {
-        new_err(
-            Kind::Blend,
-            "fixed: expected \"auto\", \"none\" or a sequence of vertex ids",
-        )
-    })?;
-    let ids = ids
-        .iter()
-        .map(|&i| {
-            u32::try_from(i)
-                .map_err(|_| new_err(Kind::Blend, format!("fixed: vertex id {i} out of range")))
-        })
-        .collect::<PyResult<Vec<u32>>>()?;
+    let ids = args::indices("fixed", obj, Kind::Blend, Elements::vertices(vertices))?;
     Ok(FixedVertices::Ids(ids))
 }
 
@@ -157,35 +148,35 @@ fn pulls(obj: Option<&Bound<'_, PyAny>>, vertices: usize) -> PyResult<Vec<PointT
     let Some(obj) = obj else {
         return Ok(Vec::new());
     };
-    let items: Vec<(i64, [f64; 3])> = if let Ok(d) = obj.cast::<pyo3::types::PyDict>() {
-        d.iter()
-            .map(|(k, v)| Ok((k.extract()?, v.extract()?)))
-            .collect::<PyResult<_>>()
-    } else {
-        obj.extract()
-    }
-    .map_err(|_| {
-        new_err(
-            Kind::Blend,
-            "pulls: expected {vertex: (x, y, z)} or a sequence of (vertex, (x, y, z))",
-        )
-    })?;
+    let items: Vec<(String, Bound<'_, PyAny>, [f64; 3])> =
+        if let Ok(d) = obj.cast::<pyo3::types::PyDict>() {
+            d.iter()
+                .map(|(k, v)| Ok(("pulls vertex".to_string(), k, v.extract()?)))
+                .collect::<PyResult<_>>()
+        } else {
+            obj.extract::<Vec<(Bound<'_, PyAny>, [f64; 3])>>()
+                .map(|items| {
+                    items
+                        .into_iter()
+                        .enumerate()
+                        .map(|(i, (k, v))| (format!("pulls[{i}][0]"), k, v))
+                        .collect()
+                })
+        }
+        .map_err(|_| {
+            new_err(
+                Kind::Blend,
+                "pulls: expected {vertex: (x, y, z)} or a sequence of (vertex, (x, y, z))",
+            )
+        })?;
     items
         .into_iter()
-        .map(|(v, p)| {
-            let vertex = u32::try_from(v)
-                .ok()
-                .filter(|&v| (v as usize) < vertices)
-                .ok_or_else(|| {
-                    new_err(
-                        Kind::Blend,
-                        format!("pulls: vertex {v} out of range (0..{vertices})"),
-                    )
-                })?;
+        .map(|(label, v, p)| {
+            let vertex = args::index(&label, &v, Kind::Blend, Elements::vertices(vertices))?;
             if p.iter().any(|x| !x.is_finite()) {
                 return Err(new_err(
                     Kind::Blend,
-                    format!("pulls: vertex {v} has a non-finite position {p:?}"),
+                    format!("pulls: vertex {vertex} has a non-finite position {p:?}"),
                 ));
             }
             Ok(PointTarget {
@@ -205,9 +196,10 @@ impl PyPhysicalBlend {
     /// (interpolated linearly). `hinge_weight` (default 0.01, 0 turns the bending term off),
     /// `tether` (default 1e-5: every solved vertex tied weakly to the predictor, so that parts
     /// that can swing either way do not snap between frames; 0 turns it off),
-    /// `kinematic_stretch` (default 10), `thin_band_rings` (default 4: long parts within 4
-    /// edges of the boundary follow the predictor; 0 turns it off), `gradient_tolerance` (default 1e-6),
-    /// `max_newton_iterations` (default 300), `sampled_start` (default True: frames start
+    /// `kinematic_stretch` (default 10), `thin_band_rings` (an integer ≥ 0, default 4: long
+    /// parts within 4 edges of the boundary follow the predictor; 0 turns it off),
+    /// `gradient_tolerance` (default 1e-6), `max_newton_iterations` (an integer ≥ 0, default
+    /// 300), `sampled_start` (default True: frames start
     /// from the predictor corrected by each target's equilibria at ¼, ½, ¾, solved once per
     /// target on first need; False saves those three solves when only a frame or two is
     /// wanted): see the library's `BlendOptions`.
@@ -230,17 +222,25 @@ impl PyPhysicalBlend {
         hinge_weight: Option<f64>,
         tether: Option<f64>,
         kinematic_stretch: Option<f64>,
-        thin_band_rings: Option<usize>,
+        thin_band_rings: Option<&Bound<'_, PyAny>>,
         gradient_tolerance: Option<f64>,
-        max_newton_iterations: Option<usize>,
+        max_newton_iterations: Option<&Bound<'_, PyAny>>,
         sampled_start: bool,
         interior: Option<&str>,
         anchor: Option<&str>,
     ) -> PyResult<Self> {
+        let thin_band_rings = args::opt_count("thin_band_rings", thin_band_rings, Kind::Blend, 0)?;
+        let max_newton_iterations = args::opt_count(
+            "max_newton_iterations",
+            max_newton_iterations,
+            Kind::Blend,
+            0,
+        )?;
         let shapes = shape_set(base, targets, faces)?;
+
         let (n, k) = (shapes.num_vertices(), shapes.len() - 1);
         let mut opts = BlendOptions {
-            fixed: fixed_vertices(fixed)?,
+            fixed: fixed_vertices(fixed, n)?,
             sampled_start,
             ..BlendOptions::default()
         };
@@ -317,16 +317,18 @@ impl PyPhysicalBlend {
     }
 
     /// Solves every weight vector of `weights` (a sequence, each as in :meth:`solve`) on up to
-    /// `threads` threads and returns a `(len(weights), n, 3)` array, in input order, equal to
-    /// solving them one by one. :attr:`last_stats` is the last frame's.
-    #[pyo3(signature = (weights, *, convex=false, threads=1))]
+    /// `threads` threads (an integer ≥ 1) and returns a `(len(weights), n, 3)` array, in input
+    /// order, equal to solving them one by one. :attr:`last_stats` is the last frame's.
+    #[pyo3(signature = (weights, *, convex=false, threads=None),
+        text_signature = "($self, weights, *, convex=False, threads=1)")]
     fn solve_many<'py>(
         &mut self,
         py: Python<'py>,
         weights: &Bound<'py, PyAny>,
         convex: bool,
-        threads: usize,
+        threads: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let threads = args::opt_count("threads", threads, Kind::Blend, 1)?.unwrap_or(1);
         let rows = weight_rows(weights, convex, self.targets)?;
         let results: Vec<Result<(Vec<_>, FrameStats), _>> = match &mut self.inner {
             Solver::Surface(b) => py

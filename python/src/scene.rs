@@ -1,6 +1,7 @@
 //! Physical blends in a scene (Ma et al. 2012, Sec. 4): rigid obstacles with keyframed motion
 //! and keyframed pulls, through the library's `scene::SceneBlend`.
 
+use crate::args::{self, Elements};
 use crate::arrays::{to_array, to_array3};
 use crate::dict::to_dict;
 use crate::errors::{new_err, IntoPyResult, Kind};
@@ -26,9 +27,6 @@ pub struct PyObstacle {
 }
 
 type Key = (f64, [f64; 3], Option<[f64; 4]>);
-
-/// `(vertex, [(frame, (x, y, z)), …])`.
-type PullSpec = (u32, Vec<(f64, [f64; 3])>);
 
 /// `(frame, translation)` or `(frame, translation, (w, x, y, z))`.
 fn key_of(obj: &Bound<'_, PyAny>) -> PyResult<Key> {
@@ -130,7 +128,7 @@ impl PyObstacle {
 /// A physical blend with obstacles and keyframed pulls, built once; :meth:`solve` is one frame
 /// (Ma et al. Sec. 4: after each equilibrium, surface vertices inside an obstacle are moved to
 /// its surface, held there, and the blend is solved again, until nothing penetrates by more
-/// than `tolerance` × the diagonal or `max_rounds` re-solves were made).
+/// than `tolerance` × the diagonal or `max_rounds` (an integer ≥ 0) re-solves were made).
 ///
 /// `pulls = [(vertex, [(frame, (x, y, z)), …]), …]` are hard pulls (the vertex's part must be
 /// held by fixed vertices). `interior` and `anchor` as in :class:`PhysicalBlend`: interior
@@ -143,12 +141,37 @@ pub struct PySceneBlend {
     last: Option<SceneFrame>,
 }
 
+/// `(vertex, [(frame, (x, y, z)), …])` of a mesh of `vertices` vertices, the `i`th pull.
+fn pull_of(i: usize, obj: &Bound<'_, PyAny>, vertices: usize) -> PyResult<Pull> {
+    let (v, keys) = obj
+        .extract::<(Bound<'_, PyAny>, Vec<(f64, [f64; 3])>)>()
+        .map_err(|_| {
+            new_err(
+                Kind::Blend,
+                format!("pulls[{i}]: expected (vertex, [(frame, (x, y, z)), …])"),
+            )
+        })?;
+    let v = args::index(
+        &format!("pulls[{i}][0]"),
+        &v,
+        Kind::Blend,
+        Elements::vertices(vertices),
+    )?;
+    let keys = keys
+        .into_iter()
+        .map(|(frame, position)| PullKey { frame, position })
+        .collect();
+    Pull::new(v, keys, PullKind::Hard).py(Kind::Blend)
+}
+
 #[pymethods]
 impl PySceneBlend {
     #[new]
     #[pyo3(signature = (base, targets, faces, *, obstacles=Vec::new(), pulls=Vec::new(),
-        fixed=None, hinge_weight=None, tolerance=1e-4, max_rounds=10, interior=None,
-        anchor=None))]
+        fixed=None, hinge_weight=None, tolerance=1e-4, max_rounds=None, interior=None,
+        anchor=None),
+        text_signature = "(base, targets, faces, *, obstacles=(), pulls=(), fixed=None, \
+            hinge_weight=None, tolerance=1e-4, max_rounds=10, interior=None, anchor=None)")]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -156,33 +179,30 @@ impl PySceneBlend {
         targets: &Bound<'_, PyAny>,
         faces: &Bound<'_, PyAny>,
         obstacles: Vec<Bound<'_, PyObstacle>>,
-        pulls: Vec<PullSpec>,
+        pulls: Vec<Bound<'_, PyAny>>,
         fixed: Option<&Bound<'_, PyAny>>,
         hinge_weight: Option<f64>,
         tolerance: f64,
-        max_rounds: usize,
+        max_rounds: Option<&Bound<'_, PyAny>>,
         interior: Option<&str>,
         anchor: Option<&str>,
     ) -> PyResult<Self> {
+        let max_rounds = args::opt_count("max_rounds", max_rounds, Kind::Blend, 0)?
+            .unwrap_or(CollisionOptions::default().max_rounds);
         let (io, ao) = crate::blend::volume_options(interior, anchor)?;
         let shapes = crate::blend::shape_set(base, targets, faces)?;
-        let k = shapes.len() - 1;
+        let (n, k) = (shapes.num_vertices(), shapes.len() - 1);
         let mut opts = BlendOptions {
-            fixed: crate::blend::fixed_vertices(fixed)?,
+            fixed: crate::blend::fixed_vertices(fixed, n)?,
             ..BlendOptions::default()
         };
         if let Some(w) = hinge_weight {
             opts.hinges.weight = w;
         }
         let pulls = pulls
-            .into_iter()
-            .map(|(v, keys)| {
-                let keys = keys
-                    .into_iter()
-                    .map(|(frame, position)| PullKey { frame, position })
-                    .collect();
-                Pull::new(v, keys, PullKind::Hard).py(Kind::Blend)
-            })
+            .iter()
+            .enumerate()
+            .map(|(i, p)| pull_of(i, p, n))
             .collect::<PyResult<Vec<_>>>()?;
         let obstacles = obstacles.iter().map(|o| o.get().inner.clone()).collect();
         let col = CollisionOptions {
@@ -218,18 +238,20 @@ impl PySceneBlend {
     }
 
     /// Every weight vector of `weights` (a sequence, each as in :meth:`solve`) as frame
-    /// `frames[k]` (default: frame number k), solved on up to `threads` threads; a
-    /// `(len(weights), n, 3)` array in input order, equal to :meth:`solve` frame by frame.
-    /// :attr:`last_stats` is the last frame's. The GIL is released.
-    #[pyo3(signature = (weights, *, frames=None, convex=false, threads=1))]
+    /// `frames[k]` (default: frame number k), solved on up to `threads` threads (an integer
+    /// ≥ 1); a `(len(weights), n, 3)` array in input order, equal to :meth:`solve` frame by
+    /// frame. :attr:`last_stats` is the last frame's. The GIL is released.
+    #[pyo3(signature = (weights, *, frames=None, convex=false, threads=None),
+        text_signature = "($self, weights, *, frames=None, convex=False, threads=1)")]
     fn solve_many<'py>(
         &mut self,
         py: Python<'py>,
         weights: &Bound<'py, PyAny>,
         frames: Option<Vec<f64>>,
         convex: bool,
-        threads: usize,
+        threads: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let threads = args::opt_count("threads", threads, Kind::Blend, 1)?.unwrap_or(1);
         let rows = crate::blend::weight_rows(weights, convex, self.targets)?;
         let numbers = frames.unwrap_or_else(|| (0..rows.len()).map(|k| k as f64).collect());
         if numbers.len() != rows.len() {
