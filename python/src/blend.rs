@@ -1,10 +1,17 @@
 //! `PhysicalBlend`: the library's stateful physical-blendshape solver (Ma et al. 2012), built
 //! once per rig, then solved for many weight vectors with the GIL released.
+//!
+//! Thread safety: a solver's numeric workspace is mutable state. It lives in a [`Mutex`] that
+//! is only ever waited for with the GIL released (inside `py.detach`), so calls from several
+//! Python threads queue instead of failing, and no thread holds the GIL while it waits for
+//! another's solve. What the properties read (`num_targets`, `summary`, the predictor) is set
+//! at construction, and `last_stats` has its own small lock, so they answer at once while a
+//! solve runs.
 
 use crate::args::{self, Elements};
 use crate::arrays::{self, to_array, to_array3};
 use crate::dict::to_dict;
-use crate::errors::{new_err, IntoPyResult, Kind};
+use crate::errors::{chain, new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
 use morphkit::mesh::ShapeSet;
 use morphkit::springs::{
@@ -12,7 +19,9 @@ use morphkit::springs::{
     InteriorOptions, PhysicalBlend, PointTarget, SurfacePredictor, VolumetricBlend, Weights,
 };
 use numpy::{PyArray2, PyArray3};
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 /// The physical blend of a base shape and its targets (Ma et al. 2012).
 ///
@@ -20,16 +29,35 @@ use pyo3::prelude::*;
 /// :meth:`solve` then returns the canonical equilibrium for a weight vector, a function of the
 /// weights alone: the same weights give the same shape in any order and on any thread.
 ///
+/// Thread-safe: one blend may be shared by several threads. Its solves (:meth:`solve`,
+/// :meth:`solve_many`) run one at a time, with the GIL released: concurrent calls wait for
+/// each other instead of failing, and each returns what it would have returned alone.
+/// :attr:`num_targets`, :attr:`summary`, :attr:`last_stats`, :meth:`predict` and
+/// :meth:`predictor` answer at once, also while a solve runs.
+///
 /// >>> blend = morphkit.PhysicalBlend(V0, [V1], F)
 /// >>> half = blend.solve([0.5])
 /// >>> blend.last_stats["converged"]
 /// True
-#[pyclass(name = "PhysicalBlend", module = "morphkit")]
+#[pyclass(name = "PhysicalBlend", module = "morphkit", frozen)]
 pub struct PyPhysicalBlend {
-    inner: Solver,
+    /// The solver; locked only with the GIL released (see the module doc).
+    inner: Mutex<Solver>,
+    /// The solver's predictor (it shares the immutable rig: no lock).
+    predictor: SurfacePredictor,
+    /// `summary`, as built (the rig does not change after construction).
+    summary: serde_json::Value,
     targets: usize,
     vertices: usize,
-    last: Option<FrameStats>,
+    /// Statistics of the last solve that finished.
+    last: Mutex<Option<FrameStats>>,
+}
+
+/// Locks `m`, also after a panic in a solve (a library bug, raised as Python's
+/// `PanicException`): every solve starts from scratch, so the workspace stays usable, as it
+/// did when a panic merely released the object's borrow.
+pub(crate) fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 /// `fixed` as given to the constructors: `None` or `"auto"`, `"none"`, or vertex ids of a
@@ -188,6 +216,11 @@ fn pulls(obj: Option<&Bound<'_, PyAny>>, vertices: usize) -> PyResult<Vec<PointT
         .collect()
 }
 
+/// `s` as a JSON value (what `summary` returns, as a dict).
+fn json<T: serde::Serialize>(s: &T) -> PyResult<serde_json::Value> {
+    serde_json::to_value(s).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}
+
 #[pymethods]
 impl PyPhysicalBlend {
     /// `base` `(n, 3)`, `targets` `(k, n, 3)` or a list of `(n, 3)`, `F` `(m, 3)` shared by all.
@@ -237,7 +270,6 @@ impl PyPhysicalBlend {
             0,
         )?;
         let shapes = shape_set(base, targets, faces)?;
-
         let (n, k) = (shapes.num_vertices(), shapes.len() - 1);
         let mut opts = BlendOptions {
             fixed: fixed_vertices(fixed, n)?,
@@ -263,22 +295,32 @@ impl PyPhysicalBlend {
             opts.max_newton_iterations = m;
         }
         let (io, ao) = volume_options(interior, anchor)?;
-        let inner = if io.mode == InteriorMode::None && ao.placement == AnchorPlacement::None {
-            Solver::Surface(Box::new(
-                py.detach(|| PhysicalBlend::new(&shapes, &opts))
-                    .py(Kind::Blend)?,
-            ))
-        } else {
-            Solver::Volume(Box::new(
-                py.detach(|| VolumetricBlend::new(&shapes, &opts, &io, &ao))
-                    .py(Kind::Blend)?,
-            ))
-        };
+        let (inner, predictor, summary) =
+            if io.mode == InteriorMode::None && ao.placement == AnchorPlacement::None {
+                let b = py
+                    .detach(|| PhysicalBlend::new(&shapes, &opts))
+                    .py(Kind::Blend)?;
+                let predictor = SurfacePredictor::from(b.predictor());
+                let summary = json(b.summary())?;
+                (Solver::Surface(Box::new(b)), predictor, summary)
+            } else {
+                let b = py
+                    .detach(|| VolumetricBlend::new(&shapes, &opts, &io, &ao))
+                    .py(Kind::Blend)?;
+                let mut summary = json(b.physical().summary())?;
+                if let serde_json::Value::Object(m) = &mut summary {
+                    m.insert("interior".into(), json(b.report())?);
+                }
+                let predictor = b.predictor();
+                (Solver::Volume(Box::new(b)), predictor, summary)
+            };
         Ok(Self {
-            inner,
+            inner: Mutex::new(inner),
+            predictor,
+            summary,
             targets: k,
             vertices: n,
-            last: None,
+            last: Mutex::new(None),
         })
     }
 
@@ -288,10 +330,11 @@ impl PyPhysicalBlend {
     /// number when there is one target), or with `convex=True` one per shape (base first)
     /// summing to 1. `pulls`: `{vertex: (x, y, z)}` hard pulls (Ma et al. Sec. 4; the vertex's
     /// part must be held by fixed vertices). Statistics of the solve are in
-    /// :attr:`last_stats`. The GIL is released while solving.
+    /// :attr:`last_stats`. The GIL is released while solving; a solve running on another
+    /// thread is waited for.
     #[pyo3(signature = (weights, *, convex=false, pulls=None))]
     fn solve<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         weights: &Bound<'py, PyAny>,
         convex: bool,
@@ -299,30 +342,32 @@ impl PyPhysicalBlend {
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let w = self::weights(weights, convex, self.targets)?;
         let targets = self::pulls(pulls, self.vertices)?;
-        let (positions, stats) = match &mut self.inner {
-            Solver::Surface(b) => {
-                let r = py
-                    .detach(|| b.solve_with(&w, &targets, None))
-                    .py(Kind::Blend)?;
-                (r.positions, r.stats)
-            }
-            Solver::Volume(b) => {
-                let r = py.detach(|| b.solve_with(&w, &targets)).py(Kind::Blend)?;
-                (r.positions, r.stats)
-            }
-        };
-        let out = to_array(py, &positions);
-        self.last = Some(stats);
-        Ok(out)
+        let positions = py
+            .detach(|| {
+                let mut solver = lock(&self.inner);
+                let r = match &mut *solver {
+                    Solver::Surface(b) => b
+                        .solve_with(&w, &targets, None)
+                        .map(|r| (r.positions, r.stats)),
+                    Solver::Volume(b) => b.solve_with(&w, &targets).map(|r| (r.positions, r.stats)),
+                };
+                r.map(|(positions, stats)| {
+                    *lock(&self.last) = Some(stats);
+                    positions
+                })
+            })
+            .py(Kind::Blend)?;
+        Ok(to_array(py, &positions))
     }
 
     /// Solves every weight vector of `weights` (a sequence, each as in :meth:`solve`) on up to
     /// `threads` threads (an integer ≥ 1) and returns a `(len(weights), n, 3)` array, in input
-    /// order, equal to solving them one by one. :attr:`last_stats` is the last frame's.
+    /// order, equal to solving them one by one. :attr:`last_stats` is the last frame's. The
+    /// GIL is released; a solve running on another thread is waited for.
     #[pyo3(signature = (weights, *, convex=false, threads=None),
         text_signature = "($self, weights, *, convex=False, threads=1)")]
     fn solve_many<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         weights: &Bound<'py, PyAny>,
         convex: bool,
@@ -330,37 +375,40 @@ impl PyPhysicalBlend {
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
         let threads = args::opt_count("threads", threads, Kind::Blend, 1)?.unwrap_or(1);
         let rows = weight_rows(weights, convex, self.targets)?;
-        let results: Vec<Result<(Vec<_>, FrameStats), _>> = match &mut self.inner {
-            Solver::Surface(b) => py
-                .detach(|| b.solve_many(&rows, threads))
-                .into_iter()
-                .map(|r| r.map(|r| (r.positions, r.stats)))
-                .collect(),
-            Solver::Volume(b) => py
-                .detach(|| b.solve_many(&rows, threads))
-                .into_iter()
-                .map(|r| r.map(|r| (r.positions, r.stats)))
-                .collect(),
-        };
+        let results = py.detach(|| {
+            let mut solver = lock(&self.inner);
+            let results: Vec<Result<_, String>> = match &mut *solver {
+                Solver::Surface(b) => b
+                    .solve_many(&rows, threads)
+                    .into_iter()
+                    .map(|r| r.map(|r| (r.positions, r.stats)).map_err(|e| chain(&e)))
+                    .collect(),
+                Solver::Volume(b) => b
+                    .solve_many(&rows, threads)
+                    .into_iter()
+                    .map(|r| r.map(|r| (r.positions, r.stats)).map_err(|e| chain(&e)))
+                    .collect(),
+            };
+            if let Some(Ok((_, stats))) = results.last() {
+                if results.iter().all(Result::is_ok) {
+                    *lock(&self.last) = Some(stats.clone());
+                }
+            }
+            results
+        });
         let mut frames = Vec::with_capacity(results.len());
-        let mut last = None;
         for (i, r) in results.into_iter().enumerate() {
-            let (positions, stats) = r.map_err(|e| {
-                new_err(
-                    Kind::Blend,
-                    format!("frame {i}: {}", crate::errors::chain(&e)),
-                )
-            })?;
-            frames.push(positions);
-            last = Some(stats);
+            frames.push(
+                r.map_err(|e| new_err(Kind::Blend, format!("frame {i}: {e}")))?
+                    .0,
+            );
         }
-        self.last = last;
         Ok(to_array3(py, &frames, self.vertices))
     }
 
     /// The predictor the solve for `weights` starts from, before the sampled correction (see
     /// :class:`Predictor`), as a new `(n, 3)` array: a preview in milliseconds, not the
-    /// equilibrium.
+    /// equilibrium. It does not wait for a solve running on another thread.
     #[pyo3(signature = (weights, *, convex=false))]
     fn predict<'py>(
         &self,
@@ -375,33 +423,24 @@ impl PyPhysicalBlend {
     /// another thread. With `interior` or `anchor` it predicts the volumetric solve's start
     /// (the interior carried along), on the input surface in world coordinates.
     fn predictor(&self) -> PyResult<PyPredictor> {
-        let p = match &self.inner {
-            Solver::Surface(b) => SurfacePredictor::from(b.predictor()),
-            Solver::Volume(v) => v.predictor(),
-        };
-        Ok(PyPredictor::new(p, self.targets))
+        Ok(PyPredictor::new(self.predictor.clone(), self.targets))
     }
 
     /// Statistics of the last solve as a dict (Newton iterations, factorizations, gradient
     /// norm and tolerance, energy, `converged`, clamped springs, unconverged vertices,
-    /// seconds), or `None` before the first.
+    /// seconds), or `None` before the first. Readable while a solve runs (it then shows the
+    /// last solve that finished).
     #[getter]
     fn last_stats<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
-        self.last.as_ref().map(|s| to_dict(py, s)).transpose()
+        let last = lock(&self.last).clone();
+        last.as_ref().map(|s| to_dict(py, s)).transpose()
     }
 
     /// What the solver was built with (vertices, springs, hinges, fixed and kinematic
     /// vertices, free unknowns, factor size, predicted bytes) as a dict.
     #[getter]
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        match &self.inner {
-            Solver::Surface(b) => to_dict(py, b.summary()),
-            Solver::Volume(b) => {
-                let d = to_dict(py, b.physical().summary())?;
-                d.set_item("interior", to_dict(py, b.report())?)?;
-                Ok(d)
-            }
-        }
+        to_dict(py, &self.summary)
     }
 
     /// Number of targets (shapes other than the base).

@@ -3,15 +3,18 @@
 
 use crate::args::{self, Elements};
 use crate::arrays::{to_array, to_array3};
+use crate::blend::lock;
 use crate::dict::to_dict;
-use crate::errors::{new_err, IntoPyResult, Kind};
+use crate::errors::{chain, new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
+use std::sync::Mutex;
 
+use morphkit::mesh::Point;
 use morphkit::scene::{
     CollisionOptions, Obstacle, Primitive, Pull, PullKey, PullKind, RigidKey, Rotation, SceneBlend,
     SceneFrame,
 };
-use morphkit::springs::{BlendOptions, Weights};
+use morphkit::springs::{BlendOptions, SurfacePredictor, Weights};
 use numpy::{PyArray2, PyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -134,11 +137,27 @@ impl PyObstacle {
 /// held by fixed vertices). `interior` and `anchor` as in :class:`PhysicalBlend`: interior
 /// vertices are never contacts, and with an anchor obstacles and pulls are mapped into its
 /// frame. Other arguments as :class:`PhysicalBlend`.
-#[pyclass(name = "SceneBlend", module = "morphkit")]
+///
+/// Thread-safe as :class:`PhysicalBlend`: solves run one at a time with the GIL released
+/// (concurrent calls wait for each other), :attr:`last_stats` and :meth:`predictor` answer at
+/// once while a solve runs.
+#[pyclass(name = "SceneBlend", module = "morphkit", frozen)]
 pub struct PySceneBlend {
-    inner: SceneBlend,
+    /// The solver; locked only with the GIL released (see `blend.rs`).
+    inner: Mutex<SceneBlend>,
+    /// Its predictor without obstacles and pulls (no lock).
+    predictor: SurfacePredictor,
     targets: usize,
-    last: Option<SceneFrame>,
+    /// The last finished frame, without its positions (what `last_stats` reports).
+    last: Mutex<Option<SceneFrame>>,
+}
+
+/// `r` kept for `last_stats` (positions dropped) and its positions.
+fn keep(last: &Mutex<Option<SceneFrame>>, mut r: SceneFrame) -> Vec<Point> {
+    let positions = std::mem::take(&mut r.positions);
+    r.extra = Vec::new();
+    *lock(last) = Some(r);
+    positions
 }
 
 /// `(vertex, [(frame, (x, y, z)), …])` of a mesh of `vertices` vertices, the `i`th pull.
@@ -213,38 +232,44 @@ impl PySceneBlend {
             .detach(|| SceneBlend::with_interior(&shapes, &opts, &io, &ao, obstacles, pulls, &col))
             .py(Kind::Blend)?;
         Ok(Self {
-            inner,
+            predictor: inner.surface_predictor(),
+            inner: Mutex::new(inner),
             targets: k,
-            last: None,
+            last: Mutex::new(None),
         })
     }
 
     /// The frame at frame number `frame` (it places obstacles and pulls) for `weights` (as in
-    /// :meth:`PhysicalBlend.solve`): a new `(n, 3)` array. The GIL is released.
+    /// :meth:`PhysicalBlend.solve`): a new `(n, 3)` array. The GIL is released; a solve
+    /// running on another thread is waited for.
     #[pyo3(signature = (weights, *, frame=0.0, convex=false))]
     fn solve<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         weights: &Bound<'py, PyAny>,
         frame: f64,
         convex: bool,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let w: Weights = crate::blend::weights(weights, convex, self.targets)?;
-        let inner = &mut self.inner;
-        let r = py.detach(|| inner.solve(frame, &w)).py(Kind::Blend)?;
-        let out = to_array(py, &r.positions);
-        self.last = Some(r);
-        Ok(out)
+        let positions = py
+            .detach(|| {
+                let mut solver = lock(&self.inner);
+                let r = solver.solve(frame, &w)?;
+                Ok::<_, morphkit::scene::SceneError>(keep(&self.last, r))
+            })
+            .py(Kind::Blend)?;
+        Ok(to_array(py, &positions))
     }
 
     /// Every weight vector of `weights` (a sequence, each as in :meth:`solve`) as frame
     /// `frames[k]` (default: frame number k), solved on up to `threads` threads (an integer
     /// ≥ 1); a `(len(weights), n, 3)` array in input order, equal to :meth:`solve` frame by
-    /// frame. :attr:`last_stats` is the last frame's. The GIL is released.
+    /// frame. :attr:`last_stats` is the last frame's. The GIL is released; a solve running on
+    /// another thread is waited for.
     #[pyo3(signature = (weights, *, frames=None, convex=false, threads=None),
         text_signature = "($self, weights, *, frames=None, convex=False, threads=1)")]
     fn solve_many<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         weights: &Bound<'py, PyAny>,
         frames: Option<Vec<f64>>,
@@ -265,21 +290,26 @@ impl PySceneBlend {
             ));
         }
         let items: Vec<(f64, Weights)> = numbers.into_iter().zip(rows).collect();
-        let inner = &mut self.inner;
-        let results = py.detach(|| inner.solve_many(&items, threads));
+        let results = py.detach(|| {
+            let mut solver = lock(&self.inner);
+            let results = solver.solve_many(&items, threads);
+            let ok = results.iter().all(Result::is_ok);
+            let n = results.len();
+            results
+                .into_iter()
+                .enumerate()
+                .map(|(k, r)| match r {
+                    // The last frame is kept for `last_stats` when all succeeded.
+                    Ok(f) if ok && k + 1 == n => Ok(keep(&self.last, f)),
+                    Ok(f) => Ok(f.positions),
+                    Err(e) => Err(chain(&e)),
+                })
+                .collect::<Vec<_>>()
+        });
         let mut out = Vec::with_capacity(results.len());
-        let mut last = None;
         for (k, r) in results.into_iter().enumerate() {
-            let f = r.map_err(|e| {
-                new_err(
-                    Kind::Blend,
-                    format!("frame {k}: {}", crate::errors::chain(&e)),
-                )
-            })?;
-            out.push(f.positions.clone());
-            last = Some(f);
+            out.push(r.map_err(|e| new_err(Kind::Blend, format!("frame {k}: {e}")))?);
         }
-        self.last = last;
         let n = out.first().map_or(0, Vec::len);
         Ok(to_array3(py, &out, n))
     }
@@ -290,7 +320,7 @@ impl PySceneBlend {
     /// in world coordinates.
     fn predictor(&self) -> PyResult<crate::blend::PyPredictor> {
         Ok(crate::blend::PyPredictor::new(
-            self.inner.surface_predictor(),
+            self.predictor.clone(),
             self.targets,
         ))
     }
@@ -298,9 +328,10 @@ impl PySceneBlend {
     /// The last frame's statistics: `solver` (as :attr:`PhysicalBlend.last_stats`),
     /// `collision` (contacts, rounds, max_penetration, tolerance, resolved, timings) and
     /// `contacts` (vertex, obstacle, position, depth), or `None` before the first solve.
+    /// Readable while a solve runs (it then shows the last frame that finished).
     #[getter]
     fn last_stats<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        let Some(r) = &self.last else {
+        let Some(r) = lock(&self.last).clone() else {
             return Ok(None);
         };
         let d = PyDict::new(py);
