@@ -3,7 +3,7 @@
 
 use crate::args::{self, Elements};
 use crate::arrays::{to_array, to_array3};
-use crate::blend::lock;
+use crate::blend::{lock, solve_in_chunks};
 use crate::dict::to_dict;
 use crate::errors::{chain, new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
@@ -264,8 +264,8 @@ impl PySceneBlend {
     /// Every weight vector of `weights` (a sequence, each as in :meth:`solve`) as frame
     /// `frames[k]` (default: frame number k), solved on up to `threads` threads (an integer
     /// ≥ 1); a `(len(weights), n, 3)` array in input order, equal to :meth:`solve` frame by
-    /// frame. :attr:`last_stats` is the last frame's. The GIL is released; a solve running on
-    /// another thread is waited for.
+    /// frame. :attr:`last_stats` is the last frame's. The GIL is released; frames are solved
+    /// `threads` at a time, and Ctrl-C (`KeyboardInterrupt`) is honoured between them.
     #[pyo3(signature = (weights, *, frames=None, convex=false, threads=None),
         text_signature = "($self, weights, *, frames=None, convex=False, threads=1)")]
     fn solve_many<'py>(
@@ -290,26 +290,22 @@ impl PySceneBlend {
             ));
         }
         let items: Vec<(f64, Weights)> = numbers.into_iter().zip(rows).collect();
-        let results = py.detach(|| {
+        let out = solve_in_chunks(py, &items, threads, |chunk| {
             let mut solver = lock(&self.inner);
-            let results = solver.solve_many(&items, threads);
+            let results = solver.solve_many(chunk, threads);
             let ok = results.iter().all(Result::is_ok);
             let n = results.len();
             results
                 .into_iter()
                 .enumerate()
                 .map(|(k, r)| match r {
-                    // The last frame is kept for `last_stats` when all succeeded.
+                    // The chunk's last frame is kept for `last_stats` when all succeeded.
                     Ok(f) if ok && k + 1 == n => Ok(keep(&self.last, f)),
                     Ok(f) => Ok(f.positions),
                     Err(e) => Err(chain(&e)),
                 })
-                .collect::<Vec<_>>()
-        });
-        let mut out = Vec::with_capacity(results.len());
-        for (k, r) in results.into_iter().enumerate() {
-            out.push(r.map_err(|e| new_err(Kind::Blend, format!("frame {k}: {e}")))?);
-        }
+                .collect()
+        })?;
         let n = out.first().map_or(0, Vec::len);
         Ok(to_array3(py, &out, n))
     }

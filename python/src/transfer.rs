@@ -83,7 +83,6 @@ impl PyCorrespondence {
             Elements::vertices(source.num_vertices()),
             Elements::vertices(target.num_vertices()),
         )?;
-
         let r = py
             .detach(|| {
                 correspond(
@@ -443,7 +442,8 @@ fn one<'py>(
 }
 
 /// Every frame of `frames` (`(k, n_s, 3)` or a list, named `name` in errors) through `f`,
-/// with the GIL released: a new `(k, n_t, 3)` array.
+/// with the GIL released: a new `(k, n_t, 3)` array. Signals are checked between frames, so
+/// that Ctrl-C (`KeyboardInterrupt`) interrupts a long batch after the frame being solved.
 fn many<'py>(
     py: Python<'py>,
     (name, frames): (&str, &Bound<'py, PyAny>),
@@ -453,14 +453,10 @@ fn many<'py>(
         + Sync,
 ) -> PyResult<Bound<'py, PyArray3<f64>>> {
     let frames = arrays::frames(name, frames, Some(n_s))?;
-    let out = py
-        .detach(|| {
-            frames
-                .iter()
-                .enumerate()
-                .map(|(i, x)| f(i, x))
-                .collect::<Result<Vec<_>, _>>()
-        })
-        .py(Kind::Transfer)?;
+    let mut out = Vec::with_capacity(frames.len());
+    for (i, x) in frames.iter().enumerate() {
+        py.check_signals()?;
+        out.push(py.detach(|| f(i, x)).py(Kind::Transfer)?);
+    }
     Ok(to_array3(py, &out, n_t))
 }
