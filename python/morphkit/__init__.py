@@ -3,7 +3,8 @@
 A thin Python client of the morphkit Rust library. Arrays follow libigl's conventions:
 vertices ``V`` as ``(n, 3) float64``, triangles ``F`` as ``(m, 3)`` integers, animations as
 ``(k, n, 3) float64``. Errors are :class:`MorphkitError` (a :class:`ValueError`); file errors
-are also :class:`OSError`. Solves release the GIL.
+are also :class:`OSError`. Solves release the GIL; solvers may be shared between threads (their
+solves queue), and batches (``solve_many``, ``transfer_many``) honour Ctrl-C between frames.
 
 >>> import morphkit
 >>> V0, F = morphkit.read("rest.obj")

@@ -1,4 +1,17 @@
-"""Type stubs of the compiled module (see the docstrings for details)."""
+"""Type stubs of the compiled module (see the docstrings for details).
+
+Conventions: face arrays may have any integer dtype (signed or unsigned, 8 to 64 bits; negative
+indices are refused). Integer arguments (counts such as ``threads``, indices such as
+``sources``) accept any integer, numpy's included: an integer outside the allowed range raises
+the module's error (a ``ValueError``) naming the argument, the value and the range; a value
+that is not an integer raises ``TypeError`` naming the argument.
+
+Thread safety: every class may be shared between threads. ``PhysicalBlend`` and ``SceneBlend``
+run one solve at a time, with the GIL released: concurrent calls wait for each other (they do
+not fail), and each returns what it would return alone. Their properties, ``predict`` and
+``predictor`` answer at once while a solve runs. ``solve_many`` and ``transfer_many`` honour
+Ctrl-C (``KeyboardInterrupt``) between frames.
+"""
 
 import os
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
@@ -10,7 +23,7 @@ __version__: str
 
 PathLike = Union[str, os.PathLike]
 Vertices = npt.NDArray[np.float64]  # (n, 3)
-Faces = npt.NDArray[np.int64]  # (m, 3)
+Faces = npt.NDArray[np.int64]  # (m, 3); as input, any integer dtype
 Frames = npt.NDArray[np.float64]  # (k, n, 3)
 ArrayLike = npt.ArrayLike
 
@@ -37,6 +50,9 @@ def continuity(
 
 
 class PhysicalBlend:
+    """Thread-safe: solves run one at a time (GIL released; concurrent calls queue), while
+    ``num_targets``, ``summary``, ``last_stats``, ``predict`` and ``predictor`` answer at once."""
+
     def __init__(
         self,
         base: ArrayLike,
@@ -47,8 +63,10 @@ class PhysicalBlend:
         hinge_weight: Optional[float] = None,
         tether: Optional[float] = None,
         kinematic_stretch: Optional[float] = None,
+        thin_band_rings: Optional[int] = None,  # >= 0
         gradient_tolerance: Optional[float] = None,
-        max_newton_iterations: Optional[int] = None,
+        max_newton_iterations: Optional[int] = None,  # >= 0
+        sampled_start: bool = True,
         interior: Optional[str] = None,
         anchor: Optional[str] = None,
     ) -> None: ...
@@ -66,7 +84,7 @@ class PhysicalBlend:
         weights: Sequence[Union[float, Sequence[float]]],
         *,
         convex: bool = False,
-        threads: int = 1,
+        threads: int = 1,  # >= 1; frames are solved `threads` at a time, Ctrl-C between them
     ) -> Frames: ...
     def predict(self, weights: Union[float, Sequence[float]], *, convex: bool = False) -> Vertices: ...
     def predictor(self) -> "Predictor": ...
@@ -124,11 +142,20 @@ class Transfer:
     def transfer_many(self, frames: Union[ArrayLike, Sequence[ArrayLike]]) -> Frames: ...
 
 def flexibility(v: ArrayLike, f: ArrayLike, frames: Union[ArrayLike, Sequence[ArrayLike]]) -> npt.NDArray[np.float64]: ...
-def geodesic_distance(v: ArrayLike, f: ArrayLike, sources: Sequence[int]) -> npt.NDArray[np.float64]: ...
+def geodesic_distance(
+    v: ArrayLike, f: ArrayLike, sources: Union[Sequence[int], ArrayLike]
+) -> npt.NDArray[np.float64]: ...
 def synthesize(recipe: PathLike) -> Tuple[Frames, Faces]: ...
 
 class Partitions:
-    def __init__(self, v: ArrayLike, f: ArrayLike, flexibility: Sequence[float], *, gamma: float = 0.1) -> None: ...
+    def __init__(
+        self,
+        v: ArrayLike,
+        f: ArrayLike,
+        flexibility: Union[Sequence[float], ArrayLike],  # (m,): one finite value >= 0 per triangle
+        *,
+        gamma: float = 0.1,
+    ) -> None: ...
     @property
     def labels(self) -> npt.NDArray[np.int64]: ...
     @property
@@ -136,7 +163,10 @@ class Partitions:
     @property
     def num_partitions(self) -> int: ...
     def refine(
-        self, *, triangles: Optional[Sequence[int]] = None, vertices: Optional[Sequence[int]] = None
+        self,
+        *,
+        triangles: Union[None, Sequence[int], ArrayLike] = None,
+        vertices: Union[None, Sequence[int], ArrayLike] = None,
     ) -> npt.NDArray[np.bool_]: ...
     def blend_weights(self, selection: ArrayLike, *, kappa: float = 1e4) -> npt.NDArray[np.float64]: ...
     def edit_pose(self, scribble: ArrayLike, axis: Sequence[float], angle: float) -> Vertices: ...
@@ -158,6 +188,9 @@ class Obstacle:
     def name(self) -> str: ...
 
 class SceneBlend:
+    """Thread-safe as :class:`PhysicalBlend`: solves queue; ``last_stats`` and ``predictor``
+    answer while a solve runs."""
+
     def __init__(
         self,
         base: ArrayLike,
@@ -169,7 +202,7 @@ class SceneBlend:
         fixed: Union[None, str, Sequence[int]] = None,
         hinge_weight: Optional[float] = None,
         tolerance: float = 1e-4,
-        max_rounds: int = 10,
+        max_rounds: int = 10,  # >= 0
         interior: Optional[str] = None,
         anchor: Optional[str] = None,
     ) -> None: ...
@@ -180,7 +213,7 @@ class SceneBlend:
         *,
         frames: Optional[Sequence[float]] = None,
         convex: bool = False,
-        threads: int = 1,
+        threads: int = 1,  # >= 1; frames are solved `threads` at a time, Ctrl-C between them
     ) -> np.ndarray: ...
     def predictor(self) -> "Predictor": ...
     @property

@@ -2,17 +2,19 @@
 //! triangles `F` as `(m, 3)` integers, sequences of frames as `(k, n, 3) float64`.
 //!
 //! Any strided array is read through a view (no copy on the Python side); `float32` vertices
-//! and any integer dtype for faces are accepted and converted. Everything else is a
-//! `MeshError` naming the argument, its dtype or shape, and the offending row.
+//! and any integer dtype for faces (signed or unsigned, 8 to 64 bits) are accepted and
+//! converted. Everything else is a `MeshError` naming the argument, its dtype or shape, and
+//! the offending row.
 
 use crate::errors::{new_err, Kind};
 use morphkit::mesh::Point;
 use numpy::ndarray::{Array2, Array3, ArrayView2};
 use numpy::{
-    IntoPyArray, PyArray2, PyArray3, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArray,
-    PyUntypedArrayMethods,
+    IntoPyArray, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
+    PyUntypedArray, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
+use pyo3::types::PyString;
 
 fn describe(obj: &Bound<'_, PyAny>) -> String {
     match obj.cast::<PyUntypedArray>() {
@@ -70,7 +72,7 @@ pub fn points(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<Point>> {
     ))
 }
 
-fn check_faces<T: Copy + TryInto<u32> + std::fmt::Display>(
+fn check_faces<T: Copy + Into<i128>>(
     name: &str,
     view: ArrayView2<'_, T>,
     num_vertices: Option<usize>,
@@ -84,49 +86,65 @@ fn check_faces<T: Copy + TryInto<u32> + std::fmt::Display>(
             ),
         ));
     }
+    let limit = num_vertices.map_or(i128::from(u32::MAX) + 1, |n| n as i128);
     let mut out = Vec::with_capacity(view.nrows());
     for (f, r) in view.outer_iter().enumerate() {
         let mut t = [0u32; 3];
         for k in 0..3 {
-            let bad = || {
-                new_err(
+            let i: i128 = r[k].into();
+            if i < 0 {
+                return Err(new_err(
+                    Kind::Mesh,
+                    format!("{name}: face {f} has a negative vertex index {i}"),
+                ));
+            }
+            if i >= limit {
+                return Err(new_err(
                     Kind::Mesh,
                     format!(
-                        "{name}: face {f} has vertex index {} out of range{}",
-                        r[k],
+                        "{name}: face {f} has vertex index {i} out of range{}",
                         num_vertices.map_or(String::new(), |n| format!(" (0..{n})"))
                     ),
-                )
-            };
-            let i: u32 = r[k].try_into().map_err(|_| bad())?;
-            if num_vertices.is_some_and(|n| i as usize >= n) {
-                return Err(bad());
+                ));
             }
-            t[k] = i;
+            t[k] = u32::try_from(i).expect("checked below the limit");
         }
         out.push(t);
     }
     Ok(out)
 }
 
-/// Reads an `(m, 3)` integer array of vertex indices, each in `0..num_vertices`.
+/// `check_faces` of `obj` read as an `(m, 3)` array of each integer dtype in turn.
+macro_rules! faces_of {
+    ($name:expr, $obj:expr, $n:expr, $($t:ty),+) => {
+        $(
+            if let Ok(a) = $obj.extract::<PyReadonlyArray2<'_, $t>>() {
+                return check_faces($name, a.as_array(), $n);
+            }
+        )+
+    };
+}
+
+/// Reads an `(m, 3)` array of vertex indices of any integer dtype (signed or unsigned, 8 to 64
+/// bits), each in `0..num_vertices`; negative indices are refused.
 pub fn faces(
     name: &str,
     obj: &Bound<'_, PyAny>,
     num_vertices: Option<usize>,
 ) -> PyResult<Vec<[u32; 3]>> {
-    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, i64>>() {
-        return check_faces(name, a.as_array(), num_vertices);
-    }
-    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, i32>>() {
-        return check_faces(name, a.as_array(), num_vertices);
-    }
-    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, u32>>() {
-        return check_faces(name, a.as_array(), num_vertices);
-    }
-    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, u64>>() {
-        return check_faces(name, a.as_array(), num_vertices);
-    }
+    faces_of!(
+        name,
+        obj,
+        num_vertices,
+        i64,
+        i32,
+        u32,
+        u64,
+        i16,
+        u16,
+        i8,
+        u8
+    );
     Err(new_err(
         Kind::Mesh,
         format!(
@@ -134,6 +152,49 @@ pub fn faces(
             describe(obj)
         ),
     ))
+}
+
+/// Reads one number per element (a 1-D array of a real dtype, or a sequence of numbers)
+/// of length `len` (`what` says what the entries are for, in messages), each finite and
+/// `≥ 0`; the first bad entry is named by its index.
+pub fn non_negative(
+    name: &str,
+    obj: &Bound<'_, PyAny>,
+    len: usize,
+    what: &str,
+) -> PyResult<Vec<f64>> {
+    let v: Vec<f64> = if let Ok(a) = obj.extract::<PyReadonlyArray1<'_, f64>>() {
+        a.as_array().to_vec()
+    } else if let Ok(a) = obj.extract::<PyReadonlyArray1<'_, f32>>() {
+        a.as_array().iter().map(|&x| f64::from(x)).collect()
+    } else {
+        let not_numbers = || {
+            new_err(
+                Kind::Mesh,
+                format!(
+                    "{name}: expected a float64 array of shape ({len},), {what}, got {}",
+                    describe(obj)
+                ),
+            )
+        };
+        if obj.is_instance_of::<PyString>() {
+            return Err(not_numbers());
+        }
+        obj.extract().map_err(|_| not_numbers())?
+    };
+    if v.len() != len {
+        return Err(new_err(
+            Kind::Mesh,
+            format!("{name}: has {} entries, expected {len} ({what})", v.len()),
+        ));
+    }
+    if let Some(i) = v.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
+        return Err(new_err(
+            Kind::Mesh,
+            format!("{name}[{i}] = {} is not a finite number ≥ 0", v[i]),
+        ));
+    }
+    Ok(v)
 }
 
 /// Reads frames: a `(k, n, 3)` float array or a sequence of `(n, 3)` arrays. Each frame must

@@ -3,6 +3,7 @@
 //! Arrays follow libigl's Python conventions (`V` `(n, 3) float64`, `F` `(m, 3)` integers);
 //! library errors become the exceptions of `morphkit/_errors.py`; every solve releases the GIL.
 
+mod args;
 mod arrays;
 mod blend;
 mod dict;

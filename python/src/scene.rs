@@ -1,16 +1,20 @@
 //! Physical blends in a scene (Ma et al. 2012, Sec. 4): rigid obstacles with keyframed motion
 //! and keyframed pulls, through the library's `scene::SceneBlend`.
 
+use crate::args::{self, Elements};
 use crate::arrays::{to_array, to_array3};
+use crate::blend::{lock, solve_in_chunks};
 use crate::dict::to_dict;
-use crate::errors::{new_err, IntoPyResult, Kind};
+use crate::errors::{chain, new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
+use std::sync::Mutex;
 
+use morphkit::mesh::Point;
 use morphkit::scene::{
     CollisionOptions, Obstacle, Primitive, Pull, PullKey, PullKind, RigidKey, Rotation, SceneBlend,
     SceneFrame,
 };
-use morphkit::springs::{BlendOptions, Weights};
+use morphkit::springs::{BlendOptions, SurfacePredictor, Weights};
 use numpy::{PyArray2, PyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -26,9 +30,6 @@ pub struct PyObstacle {
 }
 
 type Key = (f64, [f64; 3], Option<[f64; 4]>);
-
-/// `(vertex, [(frame, (x, y, z)), …])`.
-type PullSpec = (u32, Vec<(f64, [f64; 3])>);
 
 /// `(frame, translation)` or `(frame, translation, (w, x, y, z))`.
 fn key_of(obj: &Bound<'_, PyAny>) -> PyResult<Key> {
@@ -130,25 +131,66 @@ impl PyObstacle {
 /// A physical blend with obstacles and keyframed pulls, built once; :meth:`solve` is one frame
 /// (Ma et al. Sec. 4: after each equilibrium, surface vertices inside an obstacle are moved to
 /// its surface, held there, and the blend is solved again, until nothing penetrates by more
-/// than `tolerance` × the diagonal or `max_rounds` re-solves were made).
+/// than `tolerance` × the diagonal or `max_rounds` (an integer ≥ 0) re-solves were made).
 ///
 /// `pulls = [(vertex, [(frame, (x, y, z)), …]), …]` are hard pulls (the vertex's part must be
 /// held by fixed vertices). `interior` and `anchor` as in :class:`PhysicalBlend`: interior
 /// vertices are never contacts, and with an anchor obstacles and pulls are mapped into its
 /// frame. Other arguments as :class:`PhysicalBlend`.
-#[pyclass(name = "SceneBlend", module = "morphkit")]
+///
+/// Thread-safe as :class:`PhysicalBlend`: solves run one at a time with the GIL released
+/// (concurrent calls wait for each other), :attr:`last_stats` and :meth:`predictor` answer at
+/// once while a solve runs.
+#[pyclass(name = "SceneBlend", module = "morphkit", frozen)]
 pub struct PySceneBlend {
-    inner: SceneBlend,
+    /// The solver; locked only with the GIL released (see `blend.rs`).
+    inner: Mutex<SceneBlend>,
+    /// Its predictor without obstacles and pulls (no lock).
+    predictor: SurfacePredictor,
     targets: usize,
-    last: Option<SceneFrame>,
+    /// The last finished frame, without its positions (what `last_stats` reports).
+    last: Mutex<Option<SceneFrame>>,
+}
+
+/// `r` kept for `last_stats` (positions dropped) and its positions.
+fn keep(last: &Mutex<Option<SceneFrame>>, mut r: SceneFrame) -> Vec<Point> {
+    let positions = std::mem::take(&mut r.positions);
+    r.extra = Vec::new();
+    *lock(last) = Some(r);
+    positions
+}
+
+/// `(vertex, [(frame, (x, y, z)), …])` of a mesh of `vertices` vertices, the `i`th pull.
+fn pull_of(i: usize, obj: &Bound<'_, PyAny>, vertices: usize) -> PyResult<Pull> {
+    let (v, keys) = obj
+        .extract::<(Bound<'_, PyAny>, Vec<(f64, [f64; 3])>)>()
+        .map_err(|_| {
+            new_err(
+                Kind::Blend,
+                format!("pulls[{i}]: expected (vertex, [(frame, (x, y, z)), …])"),
+            )
+        })?;
+    let v = args::index(
+        &format!("pulls[{i}][0]"),
+        &v,
+        Kind::Blend,
+        Elements::vertices(vertices),
+    )?;
+    let keys = keys
+        .into_iter()
+        .map(|(frame, position)| PullKey { frame, position })
+        .collect();
+    Pull::new(v, keys, PullKind::Hard).py(Kind::Blend)
 }
 
 #[pymethods]
 impl PySceneBlend {
     #[new]
     #[pyo3(signature = (base, targets, faces, *, obstacles=Vec::new(), pulls=Vec::new(),
-        fixed=None, hinge_weight=None, tolerance=1e-4, max_rounds=10, interior=None,
-        anchor=None))]
+        fixed=None, hinge_weight=None, tolerance=1e-4, max_rounds=None, interior=None,
+        anchor=None),
+        text_signature = "(base, targets, faces, *, obstacles=(), pulls=(), fixed=None, \
+            hinge_weight=None, tolerance=1e-4, max_rounds=10, interior=None, anchor=None)")]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -156,33 +198,30 @@ impl PySceneBlend {
         targets: &Bound<'_, PyAny>,
         faces: &Bound<'_, PyAny>,
         obstacles: Vec<Bound<'_, PyObstacle>>,
-        pulls: Vec<PullSpec>,
+        pulls: Vec<Bound<'_, PyAny>>,
         fixed: Option<&Bound<'_, PyAny>>,
         hinge_weight: Option<f64>,
         tolerance: f64,
-        max_rounds: usize,
+        max_rounds: Option<&Bound<'_, PyAny>>,
         interior: Option<&str>,
         anchor: Option<&str>,
     ) -> PyResult<Self> {
+        let max_rounds = args::opt_count("max_rounds", max_rounds, Kind::Blend, 0)?
+            .unwrap_or(CollisionOptions::default().max_rounds);
         let (io, ao) = crate::blend::volume_options(interior, anchor)?;
         let shapes = crate::blend::shape_set(base, targets, faces)?;
-        let k = shapes.len() - 1;
+        let (n, k) = (shapes.num_vertices(), shapes.len() - 1);
         let mut opts = BlendOptions {
-            fixed: crate::blend::fixed_vertices(fixed)?,
+            fixed: crate::blend::fixed_vertices(fixed, n)?,
             ..BlendOptions::default()
         };
         if let Some(w) = hinge_weight {
             opts.hinges.weight = w;
         }
         let pulls = pulls
-            .into_iter()
-            .map(|(v, keys)| {
-                let keys = keys
-                    .into_iter()
-                    .map(|(frame, position)| PullKey { frame, position })
-                    .collect();
-                Pull::new(v, keys, PullKind::Hard).py(Kind::Blend)
-            })
+            .iter()
+            .enumerate()
+            .map(|(i, p)| pull_of(i, p, n))
             .collect::<PyResult<Vec<_>>>()?;
         let obstacles = obstacles.iter().map(|o| o.get().inner.clone()).collect();
         let col = CollisionOptions {
@@ -193,43 +232,51 @@ impl PySceneBlend {
             .detach(|| SceneBlend::with_interior(&shapes, &opts, &io, &ao, obstacles, pulls, &col))
             .py(Kind::Blend)?;
         Ok(Self {
-            inner,
+            predictor: inner.surface_predictor(),
+            inner: Mutex::new(inner),
             targets: k,
-            last: None,
+            last: Mutex::new(None),
         })
     }
 
     /// The frame at frame number `frame` (it places obstacles and pulls) for `weights` (as in
-    /// :meth:`PhysicalBlend.solve`): a new `(n, 3)` array. The GIL is released.
+    /// :meth:`PhysicalBlend.solve`): a new `(n, 3)` array. The GIL is released; a solve
+    /// running on another thread is waited for.
     #[pyo3(signature = (weights, *, frame=0.0, convex=false))]
     fn solve<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         weights: &Bound<'py, PyAny>,
         frame: f64,
         convex: bool,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let w: Weights = crate::blend::weights(weights, convex, self.targets)?;
-        let inner = &mut self.inner;
-        let r = py.detach(|| inner.solve(frame, &w)).py(Kind::Blend)?;
-        let out = to_array(py, &r.positions);
-        self.last = Some(r);
-        Ok(out)
+        let positions = py
+            .detach(|| {
+                let mut solver = lock(&self.inner);
+                let r = solver.solve(frame, &w)?;
+                Ok::<_, morphkit::scene::SceneError>(keep(&self.last, r))
+            })
+            .py(Kind::Blend)?;
+        Ok(to_array(py, &positions))
     }
 
     /// Every weight vector of `weights` (a sequence, each as in :meth:`solve`) as frame
-    /// `frames[k]` (default: frame number k), solved on up to `threads` threads; a
-    /// `(len(weights), n, 3)` array in input order, equal to :meth:`solve` frame by frame.
-    /// :attr:`last_stats` is the last frame's. The GIL is released.
-    #[pyo3(signature = (weights, *, frames=None, convex=false, threads=1))]
+    /// `frames[k]` (default: frame number k), solved on up to `threads` threads (an integer
+    /// ≥ 1); a `(len(weights), n, 3)` array in input order, equal to :meth:`solve` frame by
+    /// frame. :attr:`last_stats` is the last frame's. The GIL is released; frames are solved
+    /// `threads` at a time, and Ctrl-C (`KeyboardInterrupt`) is honoured between them.
+    #[pyo3(signature = (weights, *, frames=None, convex=false, threads=None),
+        text_signature = "($self, weights, *, frames=None, convex=False, threads=1)")]
     fn solve_many<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         weights: &Bound<'py, PyAny>,
         frames: Option<Vec<f64>>,
         convex: bool,
-        threads: usize,
+        threads: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let threads = args::opt_count("threads", threads, Kind::Blend, 1)?.unwrap_or(1);
         let rows = crate::blend::weight_rows(weights, convex, self.targets)?;
         let numbers = frames.unwrap_or_else(|| (0..rows.len()).map(|k| k as f64).collect());
         if numbers.len() != rows.len() {
@@ -243,21 +290,22 @@ impl PySceneBlend {
             ));
         }
         let items: Vec<(f64, Weights)> = numbers.into_iter().zip(rows).collect();
-        let inner = &mut self.inner;
-        let results = py.detach(|| inner.solve_many(&items, threads));
-        let mut out = Vec::with_capacity(results.len());
-        let mut last = None;
-        for (k, r) in results.into_iter().enumerate() {
-            let f = r.map_err(|e| {
-                new_err(
-                    Kind::Blend,
-                    format!("frame {k}: {}", crate::errors::chain(&e)),
-                )
-            })?;
-            out.push(f.positions.clone());
-            last = Some(f);
-        }
-        self.last = last;
+        let out = solve_in_chunks(py, &items, threads, |chunk| {
+            let mut solver = lock(&self.inner);
+            let results = solver.solve_many(chunk, threads);
+            let ok = results.iter().all(Result::is_ok);
+            let n = results.len();
+            results
+                .into_iter()
+                .enumerate()
+                .map(|(k, r)| match r {
+                    // The chunk's last frame is kept for `last_stats` when all succeeded.
+                    Ok(f) if ok && k + 1 == n => Ok(keep(&self.last, f)),
+                    Ok(f) => Ok(f.positions),
+                    Err(e) => Err(chain(&e)),
+                })
+                .collect()
+        })?;
         let n = out.first().map_or(0, Vec::len);
         Ok(to_array3(py, &out, n))
     }
@@ -268,7 +316,7 @@ impl PySceneBlend {
     /// in world coordinates.
     fn predictor(&self) -> PyResult<crate::blend::PyPredictor> {
         Ok(crate::blend::PyPredictor::new(
-            self.inner.surface_predictor(),
+            self.predictor.clone(),
             self.targets,
         ))
     }
@@ -276,9 +324,10 @@ impl PySceneBlend {
     /// The last frame's statistics: `solver` (as :attr:`PhysicalBlend.last_stats`),
     /// `collision` (contacts, rounds, max_penetration, tolerance, resolved, timings) and
     /// `contacts` (vertex, obstacle, position, depth), or `None` before the first solve.
+    /// Readable while a solve runs (it then shows the last frame that finished).
     #[getter]
     fn last_stats<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        let Some(r) = &self.last else {
+        let Some(r) = lock(&self.last).clone() else {
             return Ok(None);
         };
         let d = PyDict::new(py);

@@ -1,6 +1,7 @@
 //! Animation synthesis (Wang & Lee 2008, Sec. 3.2 and 4): flexibility, partitions and
 //! intelligent scribbling, Eq. 5 blend weights, heat-method geodesics, and whole recipes.
 
+use crate::args::{self, Elements};
 use crate::arrays::{self, faces_to_array, to_array3};
 use crate::errors::{new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
@@ -65,19 +66,25 @@ fn mask_of(name: &str, obj: &Bound<'_, PyAny>, len: usize) -> PyResult<Vec<bool>
 
 #[pymethods]
 impl PyPartitions {
+    /// `flexibility`: one finite value ≥ 0 per triangle of `f` (as :func:`flexibility`
+    /// returns); anything else is a :class:`MeshError` naming the first bad entry.
     #[new]
     #[pyo3(signature = (v, f, flexibility, *, gamma=GAMMA))]
     fn new(
         v: &Bound<'_, PyAny>,
         f: &Bound<'_, PyAny>,
-        flexibility: Vec<f64>,
+        flexibility: &Bound<'_, PyAny>,
         gamma: f64,
     ) -> PyResult<Self> {
         let mesh = from_arrays("target", v, f)?;
+        let values = arrays::non_negative(
+            "flexibility",
+            flexibility,
+            mesh.num_triangles(),
+            "one per triangle of F",
+        )?;
         let topology = Topology::new(mesh.num_vertices(), &mesh.triangles);
-        let flex = Flexibility {
-            values: flexibility,
-        };
+        let flex = Flexibility { values };
         let inner = Partitions::new(&flex, &topology, gamma).py(Kind::Transfer)?;
         Ok(Self {
             inner,
@@ -113,12 +120,23 @@ impl PyPartitions {
     fn refine<'py>(
         &self,
         py: Python<'py>,
-        triangles: Option<Vec<u32>>,
-        vertices: Option<Vec<u32>>,
+        triangles: Option<&Bound<'py, PyAny>>,
+        vertices: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let (nv, nf) = (self.mesh.num_vertices(), self.mesh.num_triangles());
         let scribble = match (triangles, vertices) {
-            (Some(t), None) => Scribble::Triangles(t),
-            (None, Some(v)) => Scribble::Vertices(v),
+            (Some(t), None) => Scribble::Triangles(args::indices(
+                "triangles",
+                t,
+                Kind::Transfer,
+                Elements::triangles(nf),
+            )?),
+            (None, Some(v)) => Scribble::Vertices(args::indices(
+                "vertices",
+                v,
+                Kind::Transfer,
+                Elements::vertices(nv),
+            )?),
             _ => {
                 return Err(new_err(
                     Kind::Transfer,
@@ -183,9 +201,15 @@ pub fn geodesic_distance<'py>(
     py: Python<'py>,
     v: &Bound<'py, PyAny>,
     f: &Bound<'py, PyAny>,
-    sources: Vec<u32>,
+    sources: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let mesh = from_arrays("mesh", v, f)?;
+    let sources = args::indices(
+        "sources",
+        sources,
+        Kind::Transfer,
+        Elements::vertices(mesh.num_vertices()),
+    )?;
     let d = py
         .detach(|| msynth::geodesic_distance(&mesh, &sources))
         .py(Kind::Transfer)?;

@@ -2,6 +2,7 @@
 //! (markers → triangle correspondence by least-squares meshes) and `Transfer` (prefactored,
 //! then one cheap solve per frame with the GIL released).
 
+use crate::args::{self, Elements};
 use crate::arrays::{self, to_array, to_array3};
 use crate::dict::to_dict;
 use crate::errors::{new_err, IntoPyResult, Kind};
@@ -29,27 +30,28 @@ pub struct PyCorrespondence {
     warped: Option<(Vec<morphkit::mesh::Point>, Vec<morphkit::mesh::Point>)>,
 }
 
-fn markers_of(obj: &Bound<'_, PyAny>) -> PyResult<Markers> {
+/// Marker pairs: the path of a markers JSON file, or `(source, target)` vertex pairs, the
+/// source vertex an index into `source`, the target vertex into `target`.
+fn markers_of(obj: &Bound<'_, PyAny>, source: Elements, target: Elements) -> PyResult<Markers> {
     if let Ok(path) = obj.extract::<PathBuf>() {
         if !obj.is_instance_of::<pyo3::types::PyList>() {
             return Markers::read(&path).py(Kind::File);
         }
     }
-    let pairs: Vec<[i64; 2]> = obj.extract().map_err(|_| {
+    let pairs: Vec<[Bound<'_, PyAny>; 2]> = obj.extract().map_err(|_| {
         new_err(
             Kind::Transfer,
             "markers: expected a markers JSON path or a sequence of (source, target) vertex pairs",
         )
     })?;
     let pairs = pairs
-        .into_iter()
+        .iter()
         .enumerate()
-        .map(|(k, [s, t])| match (u32::try_from(s), u32::try_from(t)) {
-            (Ok(s), Ok(t)) => Ok([s, t]),
-            _ => Err(new_err(
-                Kind::Transfer,
-                format!("markers: pair {k} ({s}, {t}) has a negative or too large vertex id"),
-            )),
+        .map(|(k, [s, t])| {
+            Ok([
+                args::index(&format!("markers[{k}][0]"), s, Kind::Transfer, source)?,
+                args::index(&format!("markers[{k}][1]"), t, Kind::Transfer, target)?,
+            ])
         })
         .collect::<PyResult<Vec<_>>>()?;
     Ok(Markers::new(pairs))
@@ -76,7 +78,11 @@ impl PyCorrespondence {
     ) -> PyResult<Self> {
         let source = from_arrays("source", vs, fs)?;
         let target = from_arrays("target", vt, ft)?;
-        let markers = markers_of(markers)?;
+        let markers = markers_of(
+            markers,
+            Elements::vertices(source.num_vertices()),
+            Elements::vertices(target.num_vertices()),
+        )?;
         let r = py
             .detach(|| {
                 correspond(
@@ -436,7 +442,8 @@ fn one<'py>(
 }
 
 /// Every frame of `frames` (`(k, n_s, 3)` or a list, named `name` in errors) through `f`,
-/// with the GIL released: a new `(k, n_t, 3)` array.
+/// with the GIL released: a new `(k, n_t, 3)` array. Signals are checked between frames, so
+/// that Ctrl-C (`KeyboardInterrupt`) interrupts a long batch after the frame being solved.
 fn many<'py>(
     py: Python<'py>,
     (name, frames): (&str, &Bound<'py, PyAny>),
@@ -446,14 +453,10 @@ fn many<'py>(
         + Sync,
 ) -> PyResult<Bound<'py, PyArray3<f64>>> {
     let frames = arrays::frames(name, frames, Some(n_s))?;
-    let out = py
-        .detach(|| {
-            frames
-                .iter()
-                .enumerate()
-                .map(|(i, x)| f(i, x))
-                .collect::<Result<Vec<_>, _>>()
-        })
-        .py(Kind::Transfer)?;
+    let mut out = Vec::with_capacity(frames.len());
+    for (i, x) in frames.iter().enumerate() {
+        py.check_signals()?;
+        out.push(py.detach(|| f(i, x)).py(Kind::Transfer)?);
+    }
     Ok(to_array3(py, &out, n_t))
 }

@@ -46,6 +46,32 @@ def test_nan_and_out_of_range():
         morphkit.PhysicalBlend(V, [V], F2)
 
 
+@pytest.mark.parametrize(
+    "dtype", [np.int8, np.int16, np.int32, np.int64, np.uint8, np.uint16, np.uint32, np.uint64]
+)
+def test_every_integer_dtype_of_faces(dtype):
+    V, F = tube(6, 6)  # 42 vertices: every index fits int8
+    ref = blend_of(V, F).solve(0.5)
+    got = blend_of(V, F.astype(dtype)).solve(0.5)
+    np.testing.assert_array_equal(got, ref)
+    assert morphkit.metrics(V, V, F.astype(dtype))["edge_length_rms"] == 0.0
+
+
+def test_negative_and_large_indices_of_small_dtypes():
+    V, F = tube(6, 6)
+    for dtype in (np.int8, np.int16):
+        F2 = F.astype(dtype)
+        F2[3, 1] = -1
+        with pytest.raises(morphkit.MeshError, match="base F: face 3 has a negative vertex index -1"):
+            blend_of(V, F2)
+    F2 = F.astype(np.uint8)
+    F2[4, 2] = 200
+    with pytest.raises(morphkit.MeshError, match=r"base F: face 4 has vertex index 200 out of range \(0..42\)"):
+        blend_of(V, F2)
+    with pytest.raises(morphkit.MeshError, match="integer"):
+        blend_of(V, F.astype(bool))
+
+
 def test_target_vertex_count():
     V, F = tube(6, 6)
     with pytest.raises(morphkit.MeshError, match="expected"):

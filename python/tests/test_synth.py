@@ -136,3 +136,35 @@ def test_edit_pose_turns_the_selected_part_about_its_joint(jointed):
     assert abs(ang - 0.6) < 0.05
     with pytest.raises(morphkit.TransferError):
         parts.edit_pose(sel, (0.0, 0.0, 0.0), 0.6)
+
+
+def test_partitions_refuse_bad_flexibility(jointed):
+    # One finite value ≥ 0 per triangle; a wrong length used to panic in the library (index out
+    # of bounds) and NaN was taken for flexible.
+    V, F, frames = jointed
+    flex = morphkit.flexibility(V, F, frames)
+    nf = len(F)
+    for bad in (flex[:-1], np.append(flex, 0.0), flex[:10]):
+        with pytest.raises(
+            morphkit.MeshError,
+            match=rf"flexibility: has {len(bad)} entries, expected {nf} \(one per triangle of F\)",
+        ):
+            morphkit.Partitions(V, F, bad)
+    for value, shown in ((np.nan, "NaN"), (np.inf, "inf"), (-0.5, "-0.5")):
+        bad = flex.copy()
+        bad[7] = value
+        bad[9] = value
+        with pytest.raises(
+            morphkit.MeshError, match=rf"flexibility\[7\] = {shown} is not a finite number ≥ 0"
+        ):
+            morphkit.Partitions(V, F, bad)
+    with pytest.raises(morphkit.MeshError, match="flexibility"):
+        morphkit.Partitions(V, F, "stiff")
+    with pytest.raises(morphkit.MeshError, match="flexibility"):
+        morphkit.Partitions(V, F, np.stack([flex, flex], axis=1))
+    # A list, float32 and an integer array are numbers too.
+    parts = morphkit.Partitions(V, F, flex)
+    for same in (flex.tolist(), flex.astype(np.float32), (flex > 0.5 * flex.max()).astype(int)):
+        other = morphkit.Partitions(V, F, same)
+        assert other.labels.shape == (nf,)
+    assert np.array_equal(morphkit.Partitions(V, F, flex.tolist()).labels, parts.labels)
