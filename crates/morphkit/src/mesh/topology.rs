@@ -193,6 +193,10 @@ impl Topology {
     pub fn num_vertices(&self) -> usize {
         self.num_vertices
     }
+    /// Number of triangles.
+    pub fn num_triangles(&self) -> usize {
+        self.face_adjacency.len()
+    }
     /// Unique undirected edges `(i, j)`, `i < j`, sorted lexicographically.
     pub fn edges(&self) -> &[[u32; 2]] {
         &self.edges

@@ -48,6 +48,34 @@ pub enum SynthError {
         /// Found length.
         found: usize,
     },
+    /// An index names no element.
+    #[error(
+        "{what}[{position}] = {index} is not a {element} index (the mesh has {count} {element}s)"
+    )]
+    Index {
+        /// What was checked.
+        what: &'static str,
+        /// Where in the list.
+        position: usize,
+        /// The index given.
+        index: usize,
+        /// `vertex` or `triangle`.
+        element: &'static str,
+        /// How many there are.
+        count: usize,
+    },
+    /// A per-element value is not finite or outside its range.
+    #[error("{what}[{index}] = {value}: {why}")]
+    Value {
+        /// What was checked.
+        what: &'static str,
+        /// The element.
+        index: usize,
+        /// Its value.
+        value: f64,
+        /// The allowed range.
+        why: &'static str,
+    },
     /// A parameter is outside its range.
     #[error("{name} = {value}: {why}")]
     Parameter {

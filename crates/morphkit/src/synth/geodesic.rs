@@ -146,11 +146,13 @@ impl HeatGeodesics {
     /// Approximate geodesic distance of every vertex from the nearest of `sources`.
     pub fn distance(&self, sources: &[u32]) -> Result<Vec<f64>, SynthError> {
         let nv = self.positions.len();
-        if let Some(&s) = sources.iter().find(|&&s| s as usize >= nv) {
-            return Err(SynthError::Length {
-                what: "geodesic source vertex index",
-                expected: nv,
-                found: s as usize,
+        if let Some((k, &s)) = sources.iter().enumerate().find(|(_, &s)| s as usize >= nv) {
+            return Err(SynthError::Index {
+                what: "geodesic sources",
+                position: k,
+                index: s as usize,
+                element: "vertex",
+                count: nv,
             });
         }
         let mut u = vec![0.0; nv];

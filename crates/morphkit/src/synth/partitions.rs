@@ -47,6 +47,26 @@ impl Partitions {
             });
         }
         let nf = flexibility.values.len();
+        if nf != topology.num_triangles() {
+            return Err(SynthError::Length {
+                what: "flexibility (one value per triangle)",
+                expected: topology.num_triangles(),
+                found: nf,
+            });
+        }
+        if let Some((t, &f)) = flexibility
+            .values
+            .iter()
+            .enumerate()
+            .find(|(_, f)| !(f.is_finite() && **f >= 0.0))
+        {
+            return Err(SynthError::Value {
+                what: "flexibility",
+                index: t,
+                value: f,
+                why: "must be a finite number >= 0",
+            });
+        }
         let below: Vec<bool> = flexibility.values.iter().map(|&f| f < gamma).collect();
         let mut parent: Vec<u32> = (0..nf as u32).collect();
         for i in 0..nf {
@@ -179,5 +199,25 @@ mod tests {
             -1.0
         )
         .is_err());
+    }
+
+    /// Issue 39: a wrong length panicked (index out of bounds) and NaN was accepted.
+    #[test]
+    fn flexibility_of_the_wrong_length_or_not_finite_is_an_error_naming_it() {
+        let g = generate::grid(10, 1, 10.0, 1.0);
+        let run = |values: Vec<f64>| {
+            partitions(&Flexibility { values }, g.num_vertices(), &g.triangles, 0.1)
+                .unwrap_err()
+                .to_string()
+        };
+        let e = run(vec![0.0; 19]);
+        assert!(e.contains("has 19 entries, expected 20"), "{e}");
+        let mut v = vec![0.0; 20];
+        v[7] = f64::NAN;
+        let e = run(v);
+        assert!(e.contains("flexibility[7] = NaN"), "{e}");
+        let mut v = vec![0.0; 20];
+        v[3] = -1.0;
+        assert!(run(v).contains("flexibility[3] = -1"));
     }
 }
