@@ -30,6 +30,25 @@ pub const LARGE_INPUT_BYTES: u64 = 64 << 20;
 /// Meshes with at least this many vertices are announced before long work on them.
 pub const LARGE_MESH_VERTICES: usize = 250_000;
 
+/// Warns once on stderr about what a solve leaves out or carries along unchanged in the mesh
+/// read from `path`: triangles that use a vertex twice (kept in the output, left out of the
+/// energy) and vertices no triangle uses (moved with the linear blend). The message gives the
+/// count and the first ids.
+pub fn warn_carried(path: &Path, mesh: &morphkit::TriMesh) {
+    let Ok(report) = morphkit::mesh::validate(mesh) else {
+        return;
+    };
+    for w in &report.warnings {
+        if matches!(
+            w,
+            morphkit::mesh::ValidationWarning::RepeatedVertexTriangles(_)
+                | morphkit::mesh::ValidationWarning::IsolatedVertices(_)
+        ) {
+            eprintln!("warning: {}: {w}", path.display());
+        }
+    }
+}
+
 /// Prints `reading N files (X MiB)…` on stderr before reading inputs that are large, so a
 /// long read is never silent (the progress bars show only on a terminal).
 pub fn announce_reading(paths: &[PathBuf]) {

@@ -241,3 +241,46 @@ fn a_seam_split_real_cylinder_blends_as_the_unsplit_one() {
     assert!(shuffled < 1e-9, "{shuffled}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Issue 37: a triangle that uses a vertex twice and a vertex no triangle uses are carried,
+/// not refused: warned about once, left out of the solve, and written back.
+#[test]
+fn degenerate_elements_are_carried_through_a_blend_and_read_back() {
+    let d = tmp_dir("weld-degenerate");
+    let (a, b) = (d.join("a.obj"), d.join("bent.obj"));
+    write_tube(&a, 24, 16, 1.0, 0.0);
+    write_tube(&b, 24, 16, 1.0, 2.0);
+    let reference = d.join("ref.obj");
+    ok(&blend_args(
+        &a,
+        &b,
+        &["--alpha", "0.5", "--out", s(&reference)],
+    ));
+    for p in [&a, &b] {
+        let mut m = read(p);
+        m.1.push(vec![0, 0, 1]);
+        write(p, &m);
+    }
+    let info = ok(&["info", s(&a)]);
+    assert!(info.contains("1 triangles use a vertex twice"), "{info}");
+    let out = d.join("out.obj");
+    let (_, err) = run_ok(&blend_args(&a, &b, &["--alpha", "0.5", "--out", s(&out)]));
+    assert!(
+        err.contains("1 triangles use a vertex twice") && err.contains(": 720"),
+        "{err}"
+    );
+    let got = read(&out);
+    assert_eq!(
+        got.1.last(),
+        Some(&vec![0, 0, 1]),
+        "the triangle is written back"
+    );
+    assert_eq!(
+        got.0,
+        read(&reference).0,
+        "and changes nothing in the solve"
+    );
+    // morphkit reads what it wrote.
+    ok(&["info", s(&out)]);
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -244,6 +244,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         .check()?;
     crate::util::announce_reading(&inputs);
     let shapes = io::read_shape_set(&inputs)?;
+    crate::util::warn_carried(&inputs[0], shapes.base());
     let weights = frame_weights(a, shapes.len())?;
     for (k, w) in weights.iter().enumerate() {
         w.coefficients(shapes.len())

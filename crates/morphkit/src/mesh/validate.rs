@@ -4,7 +4,7 @@
 //! |---|---|---|
 //! | index out of range | [`MeshError::IndexOutOfRange`] | nothing downstream can interpret it |
 //! | NaN or infinite coordinate | [`MeshError::NonFinite`] | it would poison every solve |
-//! | triangle repeating a vertex | [`MeshError::RepeatedVertex`] | it has no area and no normal, by construction |
+//! | triangle repeating a vertex | warning | exporters write them; it has no area, so solvers leave it out ([`super::Weld::shapes`]) and writers keep it |
 //! | zero-area triangle (collinear vertices) | warning | real scans have them; algorithms guard against them |
 //! | duplicate triangle | warning | reported; springs deduplicate edges anyway |
 //! | duplicate (coincident) vertex positions | warning | seams in UV-split meshes are common and legitimate |
@@ -33,22 +33,16 @@ pub enum MeshError {
         /// The bad value.
         value: f64,
     },
-    /// A triangle uses the same vertex twice.
-    #[error("triangle {triangle} uses vertex {vertex} twice")]
-    RepeatedVertex {
-        /// Offending triangle.
-        triangle: usize,
-        /// The repeated vertex.
-        vertex: u32,
-    },
-    /// The mesh has no triangles.
-    #[error("the mesh has no triangles")]
+    /// The mesh has no triangles (or only triangles that use a vertex twice).
+    #[error("the mesh has no triangles with three distinct vertices")]
     NoTriangles,
 }
 
 /// Something odd about a mesh that does not stop it from being used.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ValidationWarning {
+    /// Triangles that use a vertex twice (or three times): no area by construction.
+    RepeatedVertexTriangles(Vec<usize>),
     /// Triangles whose area is below `1e-12 ×` the squared bounding-box diagonal.
     DegenerateTriangles(Vec<usize>),
     /// Pairs `(first, duplicate)` of triangles with the same vertex set.
@@ -71,6 +65,12 @@ impl std::fmt::Display for ValidationWarning {
             format!("{}{more}", head.join(", "))
         }
         match self {
+            Self::RepeatedVertexTriangles(v) => write!(
+                f,
+                "{} triangles use a vertex twice (left out of solves, kept in outputs): {}",
+                v.len(),
+                list(v)
+            ),
             Self::DegenerateTriangles(v) => {
                 write!(f, "{} zero-area triangles: {}", v.len(), list(v))
             }
@@ -117,6 +117,7 @@ pub fn validate(mesh: &TriMesh) -> Result<ValidationReport, MeshError> {
         }
     }
     let mut used = vec![false; nv];
+    let mut repeated = Vec::new();
     for (t, tri) in mesh.triangles.iter().enumerate() {
         for &i in tri {
             if i as usize >= nv {
@@ -128,24 +129,29 @@ pub fn validate(mesh: &TriMesh) -> Result<ValidationReport, MeshError> {
             }
             used[i as usize] = true;
         }
-        if tri[0] == tri[1] || tri[0] == tri[2] {
-            return Err(MeshError::RepeatedVertex {
-                triangle: t,
-                vertex: tri[0],
-            });
-        }
-        if tri[1] == tri[2] {
-            return Err(MeshError::RepeatedVertex {
-                triangle: t,
-                vertex: tri[1],
-            });
+        if tri[0] == tri[1] || tri[0] == tri[2] || tri[1] == tri[2] {
+            repeated.push(t);
         }
     }
+    if repeated.len() == mesh.num_triangles() {
+        return Err(MeshError::NoTriangles);
+    }
     let mut report = ValidationReport::default();
+    if !repeated.is_empty() {
+        report
+            .warnings
+            .push(ValidationWarning::RepeatedVertexTriangles(repeated));
+    }
     let d = mesh.bbox_diagonal();
     let area_tol = 1e-12 * d * d;
     let degenerate: Vec<usize> = (0..mesh.num_triangles())
-        .filter(|&t| 0.5 * norm(triangle_normal(&mesh.positions, mesh.triangles[t])) <= area_tol)
+        .filter(|&t| {
+            let [a, b, c] = mesh.triangles[t];
+            a != b
+                && b != c
+                && c != a
+                && 0.5 * norm(triangle_normal(&mesh.positions, mesh.triangles[t])) <= area_tol
+        })
         .collect();
     if !degenerate.is_empty() {
         report
@@ -243,5 +249,24 @@ mod tests {
             .warnings
             .contains(&ValidationWarning::DuplicateTriangles(vec![(0, 2)])));
         assert_eq!(r.isolated_vertices(), &[4]);
+    }
+
+    /// Issue 37: a triangle that uses a vertex twice made readers refuse the whole file.
+    #[test]
+    fn a_triangle_that_uses_a_vertex_twice_is_a_warning_and_only_such_triangles_an_error() {
+        let mut m = tri();
+        m.triangles.push([1, 1, 2]);
+        m.triangles.push([0, 2, 2]);
+        let r = validate(&m).unwrap();
+        assert!(r
+            .warnings
+            .contains(&ValidationWarning::RepeatedVertexTriangles(vec![1, 2])));
+        // They are not also listed as zero-area triangles.
+        assert!(!r
+            .warnings
+            .iter()
+            .any(|w| matches!(w, ValidationWarning::DegenerateTriangles(_))));
+        let only = TriMesh::new(m.positions.clone(), vec![[0, 0, 1]]);
+        assert_eq!(validate(&only), Err(MeshError::NoTriangles));
     }
 }

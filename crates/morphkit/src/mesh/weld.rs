@@ -159,8 +159,13 @@ impl Weld {
     }
 
     /// The welded rig: the base with welded triangles and every shape gathered, names kept.
+    ///
+    /// Triangles that use a vertex twice (exporters write them; they have no area) are left
+    /// out here too, so that every solve on a welded rig sees only proper triangles, while
+    /// the input (and every output written in its layout) keeps them.
     pub fn shapes(&self, shapes: &ShapeSet) -> Result<ShapeSet, ShapeSetError> {
-        if self.is_identity() {
+        let proper = |t: &[u32; 3]| t[0] != t[1] && t[1] != t[2] && t[2] != t[0];
+        if self.is_identity() && shapes.triangles().iter().all(proper) {
             return Ok(shapes.clone());
         }
         let base = TriMesh::new(
@@ -220,6 +225,25 @@ mod tests {
         // Scatter puts every copy where its original is.
         let back = w.scatter(welded.positions(1));
         assert_eq!(back, shapes.positions(1));
+    }
+
+    #[test]
+    fn triangles_that_use_a_vertex_twice_are_left_out_of_the_solve_only() {
+        let mut m = generate::grid(3, 3, 1.0, 1.0);
+        m.triangles.push([0, 0, 1]);
+        let shapes = ShapeSet::new(
+            m.clone(),
+            vec![
+                ("a".into(), m.positions.clone()),
+                ("b".into(), m.positions.clone()),
+            ],
+        )
+        .unwrap();
+        let w = Weld::of_shapes(&shapes, WELD_TOLERANCE);
+        assert!(w.is_identity());
+        let solved = w.shapes(&shapes).unwrap();
+        assert_eq!(solved.triangles().len(), m.triangles.len() - 1);
+        assert_eq!(shapes.triangles().len(), m.triangles.len());
     }
 
     #[test]

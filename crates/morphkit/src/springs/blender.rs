@@ -79,6 +79,18 @@ impl PhysicalBlend {
     ) -> Result<Self, BlendError> {
         let o = options;
         check_options(o)?;
+        // Triangles that use a vertex twice carry no energy: the solve leaves them out.
+        let proper;
+        let shapes = if shapes
+            .triangles()
+            .iter()
+            .any(|t| t[0] == t[1] || t[1] == t[2] || t[2] == t[0])
+        {
+            proper = crate::mesh::Weld::identity(shapes.num_vertices()).shapes(shapes)?;
+            &proper
+        } else {
+            shapes
+        };
         let bound =
             predicted_bytes_lower_bound(
                 shapes.num_vertices(),

@@ -193,6 +193,9 @@ pub enum BlendError {
     /// The mesh or shape set is unusable.
     #[error(transparent)]
     Mesh(#[from] crate::mesh::MeshError),
+    /// The shapes do not share one connectivity.
+    #[error(transparent)]
+    Shapes(#[from] crate::mesh::ShapeSetError),
     /// Options out of their valid range.
     #[error("invalid option: {0}")]
     InvalidOption(String),
