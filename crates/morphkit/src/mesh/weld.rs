@@ -45,7 +45,7 @@ impl Weld {
         let n = shapes.num_vertices();
         let base = shapes.positions(0);
         let tol = tolerance * bbox_diagonal(base);
-        if n == 0 || !(tol > 0.0) || !tol.is_finite() {
+        if n == 0 || !(tol.is_finite() && tol > 0.0) {
             return Self::identity(n);
         }
         // Cells of side `tol`: a close pair lies in the same or a neighbouring cell.
