@@ -8,7 +8,7 @@ mod common;
 use morphkit::mesh::{bbox_diagonal, generate, Point, ShapeSet, Topology, TriMesh};
 use morphkit::springs::{
     fold_metrics, linear_blend, sequence_continuity, BlendError, BlendOptions, FixedVertices,
-    PhysicalBlend, Weights, JUMP_BOUND,
+    MemoryEstimate, PhysicalBlend, Weights, JUMP_BOUND,
 };
 
 fn dist(a: Point, b: Point) -> f64 {
@@ -293,7 +293,7 @@ fn degenerate_or_too_large_input_is_refused() {
     // symbolic estimate, which a limit just under the estimate still refuses.
     let BlendError::TooLarge {
         predicted_bytes: bound,
-        at_least: true,
+        basis: MemoryEstimate::LowerBound,
         ..
     } = e
     else {
@@ -314,7 +314,7 @@ fn degenerate_or_too_large_input_is_refused() {
         matches!(
             e,
             BlendError::TooLarge {
-                at_least: false,
+                basis: MemoryEstimate::Symbolic,
                 ..
             }
         ),

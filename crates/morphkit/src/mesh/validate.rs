@@ -158,7 +158,8 @@ pub fn validate(mesh: &TriMesh) -> Result<ValidationReport, MeshError> {
             .warnings
             .push(ValidationWarning::DegenerateTriangles(degenerate));
     }
-    let mut seen = std::collections::HashMap::with_capacity(mesh.num_triangles());
+    let mut seen =
+        super::FastMap::with_capacity_and_hasher(mesh.num_triangles(), Default::default());
     let mut dup_tris = Vec::new();
     for (t, tri) in mesh.triangles.iter().enumerate() {
         let mut key = *tri;
@@ -174,7 +175,7 @@ pub fn validate(mesh: &TriMesh) -> Result<ValidationReport, MeshError> {
             .warnings
             .push(ValidationWarning::DuplicateTriangles(dup_tris));
     }
-    let mut seen_pos = std::collections::HashMap::with_capacity(nv);
+    let mut seen_pos = super::FastMap::with_capacity_and_hasher(nv, Default::default());
     let mut dup_v = Vec::new();
     for (v, p) in mesh.positions.iter().enumerate() {
         let key = [p[0].to_bits(), p[1].to_bits(), p[2].to_bits()];

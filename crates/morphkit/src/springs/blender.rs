@@ -3,6 +3,7 @@
 //! or many in parallel.
 
 use super::constraints::{stretched_vertices, thin_bands, Components, Constraints};
+use super::frame_solver::{report_lost, FrameSolver};
 use super::newton::{projected_newton, reference_at, trust_region, Problem, Workspace};
 use super::options::{
     check_options, BlendOptions, BlendResult, FrameStats, LinearSolver, RigSummary,
@@ -11,15 +12,15 @@ use super::predictor::BlendPredictor;
 use super::reference::{Factor, References};
 use super::rotation_predictor::RotationPredictor;
 use super::sampled_start::{shifted, Sampler, StartSamples};
-use super::system::{
-    expand_vertex_order, predicted_bytes, predicted_bytes_lower_bound, vertex_nested_dissection,
-    FreeSystem,
-};
+use super::system::{expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem};
 use super::terms::{
     BlockHessian, BlockPattern, EnergyTerm, Held, HingeTerm, PointTarget, PointTerm, SpringTerm,
     TermParameters,
 };
-use super::{predictor, BlendError, FillOrdering, Predictor, SpringSet, StiffnessRule, Weights};
+use super::{
+    predictor, BlendError, FillOrdering, MemoryEstimate, Predictor, SpringSet, StiffnessRule,
+    Weights,
+};
 use crate::mesh::{validate, Point, ShapeSet, Topology};
 use crate::sparse::{AggregationLevels, AggregationPreconditioner, Ordering};
 use std::sync::Arc;
@@ -64,6 +65,12 @@ impl std::fmt::Debug for PhysicalBlend {
     }
 }
 
+/// What [`PhysicalBlend::build`] made: the blend, or only its memory estimate.
+enum Built {
+    Blend(Box<PhysicalBlend>),
+    Estimate(u64),
+}
+
 impl PhysicalBlend {
     /// Builds springs, hinges, constraints, the Hessian pattern and its symbolic factorization.
     pub fn new(shapes: &ShapeSet, options: &BlendOptions) -> Result<Self, BlendError> {
@@ -77,6 +84,34 @@ impl PhysicalBlend {
         options: &BlendOptions,
         extra: Vec<Box<dyn EnergyTerm>>,
     ) -> Result<Self, BlendError> {
+        match Self::build(shapes, options, extra, false)? {
+            Built::Blend(b) => Ok(*b),
+            Built::Estimate(_) => Err(BlendError::InvalidOption(
+                "internal: an estimate where a blend was built".into(),
+            )),
+        }
+    }
+
+    /// The symbolic analysis's memory estimate of a blend of `shapes` (bytes), without the
+    /// early checks and without building the solver ([`crate::springs`]' memory module).
+    pub(crate) fn estimate_bytes(
+        shapes: &ShapeSet,
+        options: &BlendOptions,
+    ) -> Result<u64, BlendError> {
+        match Self::build(shapes, options, Vec::new(), true)? {
+            Built::Estimate(b) => Ok(b),
+            Built::Blend(_) => Err(BlendError::InvalidOption(
+                "internal: a blend where an estimate was asked for".into(),
+            )),
+        }
+    }
+
+    fn build(
+        shapes: &ShapeSet,
+        options: &BlendOptions,
+        extra: Vec<Box<dyn EnergyTerm>>,
+        estimate_only: bool,
+    ) -> Result<Built, BlendError> {
         let o = options;
         check_options(o)?;
         // Triangles that use a vertex twice carry no energy: the solve leaves them out.
@@ -91,19 +126,8 @@ impl PhysicalBlend {
         } else {
             shapes
         };
-        let bound =
-            predicted_bytes_lower_bound(
-                shapes.num_vertices(),
-                shapes.triangles(),
-                o.factor_precision,
-            ) + StartSamples::bytes(shapes.num_vertices(), shapes.len() - 1, o.sampled_start);
-        if bound > o.max_memory_bytes {
-            return Err(BlendError::TooLarge {
-                vertices: shapes.num_vertices(),
-                predicted_bytes: bound,
-                limit_bytes: o.max_memory_bytes,
-                at_least: true,
-            });
+        if !estimate_only {
+            super::memory::check_early(shapes, o)?;
         }
         for s in 0..shapes.len() {
             validate(&shapes.mesh(s))?;
@@ -187,12 +211,15 @@ impl PhysicalBlend {
         summary.predicted_bytes =
             predicted_bytes(&block_pattern, vertex_order.as_deref(), o.factor_precision)?
                 + StartSamples::bytes(n, shapes.len() - 1, o.sampled_start);
+        if estimate_only {
+            return Ok(Built::Estimate(summary.predicted_bytes));
+        }
         if summary.predicted_bytes > o.max_memory_bytes {
             return Err(BlendError::TooLarge {
                 vertices: n,
                 predicted_bytes: summary.predicted_bytes,
                 limit_bytes: o.max_memory_bytes,
-                at_least: false,
+                basis: MemoryEstimate::Symbolic,
             });
         }
         let system = FreeSystem::new(block_pattern.clone(), &constraints.fixed_dof)?;
@@ -244,7 +271,7 @@ impl PhysicalBlend {
         if let Some(levels) = &aggregation {
             ws.aggregation = Some(AggregationPreconditioner::new(levels.clone())?);
         }
-        Ok(Self {
+        Ok(Built::Blend(Box::new(Self {
             rig: Arc::new(Rig {
                 shapes: shapes.clone(),
                 terms,
@@ -261,7 +288,7 @@ impl PhysicalBlend {
                 summary,
             }),
             ws,
-        })
+        })))
     }
 
     /// Sizes of what was built.
@@ -414,50 +441,6 @@ impl PhysicalBlend {
             rig: &self.rig,
             ws: &mut self.ws,
         }
-    }
-}
-
-/// The results of [`PhysicalBlend::map_frames`] with every lost item (`None`, a thread that
-/// panicked) reported as an error naming its frame.
-pub(crate) fn report_lost<R, E: From<BlendError>>(
-    slots: Vec<Option<Result<R, E>>>,
-) -> Vec<Result<R, E>> {
-    slots
-        .into_iter()
-        .enumerate()
-        .map(|(k, r)| {
-            r.unwrap_or_else(
-                || Err(BlendError::InvalidOption(format!("frame {k} was lost")).into()),
-            )
-        })
-        .collect()
-}
-
-/// One thread's view of a [`PhysicalBlend`]: the shared rig and that thread's numeric
-/// workspace. Its solves are those of the blend, bit for bit.
-pub struct FrameSolver<'a> {
-    pub(super) rig: &'a Rig,
-    pub(super) ws: &'a mut Workspace,
-}
-
-impl FrameSolver<'_> {
-    /// As [`PhysicalBlend::solve_with`].
-    pub fn solve_with(
-        &mut self,
-        weights: &Weights,
-        targets: &[PointTarget],
-        start: Option<&[crate::mesh::Point]>,
-    ) -> Result<BlendResult, BlendError> {
-        let c = weights.coefficients(self.rig.shapes.len())?;
-        let from = match start {
-            Some(p) => Start::From(p),
-            None => Start::Canonical,
-        };
-        let factor = match from {
-            Start::Canonical if targets.is_empty() => Factor::Reference,
-            _ => Factor::Fresh,
-        };
-        self.rig.solve(self.ws, &c, targets, from, factor)
     }
 }
 

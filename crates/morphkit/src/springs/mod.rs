@@ -81,8 +81,10 @@
 mod blender;
 mod constraints;
 pub mod continuity;
+mod frame_solver;
 mod gauge;
 pub mod interior;
+mod memory;
 pub mod metrics;
 mod newton;
 mod options;
@@ -97,16 +99,18 @@ pub mod terms;
 pub mod tether;
 pub mod weights;
 
-pub(crate) use blender::report_lost;
-pub use blender::{blend, FrameSolver, PhysicalBlend};
+pub use blender::{blend, PhysicalBlend};
 pub use constraints::{
     stretched_vertices, thin_bands, AlignedComponent, Components, Constraints, FixedVertices, Gauge,
 };
 pub use continuity::{sequence_continuity, Continuity, ContinuityCheck, Jump, JUMP_BOUND};
+pub(crate) use frame_solver::report_lost;
+pub use frame_solver::FrameSolver;
 pub use interior::{
     AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions, SurfacePredictor,
     VolumetricBlend,
 };
+pub use memory::{SAMPLED_ABOVE, SAMPLE_VERTICES};
 pub use metrics::{blend_metrics, fold_metrics, linear_blend, BlendMetrics, FoldMetrics};
 pub use options::{
     BlendOptions, BlendResult, FillOrdering, FrameStats, LinearSolver, Precision, Preconditioner,
@@ -116,6 +120,37 @@ pub use predictor::BlendPredictor;
 pub use spring_set::{Spring, SpringKind, SpringOptions, SpringSet, StiffnessRule, SCALE_RANGE};
 pub use terms::{HingeOptions, PointTarget};
 pub use weights::Weights;
+
+/// What a memory prediction of [`BlendError::TooLarge`] rests on (see `springs::memory`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MemoryEstimate {
+    /// The symbolic analysis of the whole Hessian: the estimate the solver allocates by.
+    Symbolic,
+    /// A lower bound from the triangle count alone, before any connectivity is built.
+    LowerBound,
+    /// The symbolic analysis of a connected part of this many vertices, scaled to the mesh.
+    Sampled {
+        /// Vertices of the part.
+        vertices: usize,
+    },
+}
+
+impl MemoryEstimate {
+    fn word(&self) -> &'static str {
+        match self {
+            Self::LowerBound => "at least",
+            _ => "about",
+        }
+    }
+    fn note(&self) -> String {
+        match self {
+            Self::Sampled { vertices } => format!(
+                " (scaled from a connected part of {vertices} vertices, before the whole mesh was set up)"
+            ),
+            _ => String::new(),
+        }
+    }
+}
 
 /// Why a blend could not be computed.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
@@ -221,7 +256,7 @@ pub enum BlendError {
         extent: f64,
     },
     /// The solver would need more memory than allowed.
-    #[error("the physical blend of {vertices} vertices would need {} {} of memory, over the limit of {}; raise the limit (--max-memory in the CLI), leave out bending springs if they are on, or blend a decimated mesh", if *at_least { "at least" } else { "about" }, gib(*predicted_bytes), gib(*limit_bytes))]
+    #[error("the physical blend of {vertices} vertices would need {} {} of memory{}, over the limit of {}; raise the limit (--max-memory in the CLI), leave out bending springs if they are on, or blend a decimated mesh", basis.word(), gib(*predicted_bytes), basis.note(), gib(*limit_bytes))]
     TooLarge {
         /// Vertex count.
         vertices: usize,
@@ -229,9 +264,8 @@ pub enum BlendError {
         predicted_bytes: u64,
         /// The limit ([`BlendOptions::max_memory_bytes`]).
         limit_bytes: u64,
-        /// The prediction is a lower bound from the counts alone (made before any
-        /// connectivity is built), not the symbolic analysis's estimate.
-        at_least: bool,
+        /// What the prediction rests on.
+        basis: MemoryEstimate,
     },
     /// The linear system could not be solved.
     #[error("equilibrium solve failed: {0}")]

@@ -35,7 +35,8 @@
 //! [`BlendOptions::thin_band_rings`](super::BlendOptions::thin_band_rings); see
 //! docs/performance.md).
 
-use super::blender::{FrameSolver, Rig, Start};
+use super::blender::{Rig, Start};
+use super::frame_solver::FrameSolver;
 use super::newton::Workspace;
 use super::reference::Factor;
 use super::{PhysicalBlend, Weights};
