@@ -271,6 +271,55 @@ fn transfer_welds_split_source_and_target() {
 }
 
 #[test]
+fn correspond_welds_and_writes_for_the_input_meshes() {
+    let t = Transfer::new("weld-correspond");
+    let m = t.markers("m.json", |q| q);
+    let reference = t.d.join("ref");
+    ok(&transfer_args(&t.src, &t.frames, &t.tgt, &m, &reference));
+    let (src, frames, tgt, ss, ts) = t.split("shuffled", true);
+    let m = t.markers("split-m.json", |[a, b]| [ss.id(a), ts.id(b)]);
+    let (corr, report) = (t.d.join("corr.json"), t.d.join("corr-report.json"));
+    let (_, err) = run_ok(&[
+        "correspond",
+        "--source",
+        s(&src),
+        "--target",
+        s(&tgt),
+        "--markers",
+        s(&m),
+        "--out",
+        s(&corr),
+        "--report",
+        s(&report),
+    ]);
+    for n in [ss.copies(), ts.copies()] {
+        assert!(err.contains(&format!("welded {n} split vertices")), "{err}");
+    }
+    assert_eq!(json(&report)["welded_vertices"]["target"], ts.copies());
+    let c = json(&corr);
+    assert_eq!(c["source_vertices"], ss.origin.len(), "input numbering");
+    assert_eq!(c["target_vertices"], ts.origin.len(), "input numbering");
+    let out = t.d.join("out");
+    let mut args = vec!["transfer", "--source-ref", s(&src), "--source"];
+    args.extend(frames.iter().map(|p| s(p)));
+    args.extend([
+        "--target",
+        s(&tgt),
+        "--correspondence",
+        s(&corr),
+        "--out",
+        s(&out),
+    ]);
+    ok(&args);
+    for k in 0..t.frames.len() {
+        let name = format!("frame_{k:04}.obj");
+        let e = error(&out.join(&name), &ts, &reference.join(&name));
+        assert!(e < 1e-9, "frame {k}: {e}");
+    }
+    let _ = std::fs::remove_dir_all(&t.d);
+}
+
+#[test]
 fn transfer_does_not_weld_a_source_seam_that_opens_in_a_frame() {
     let t = Transfer::new("weld-transfer-part");
     let (src, frames, tgt, ss, ts) = t.split("split", false);
