@@ -54,19 +54,16 @@ pub fn welded_id(weld: &Weld, v: u32, what: &str) -> anyhow::Result<u32> {
     }
 }
 
-/// Marker pairs in welded numbering.
+/// Marker pairs in welded numbering (an id out of range stays as it is, for the
+/// correspondence's own message naming the marker).
 pub fn welded_markers(m: &Markers, source: &Weld, target: &Weld) -> anyhow::Result<Markers> {
-    let pairs = m
-        .pairs
-        .iter()
-        .map(|&[s, t]| {
-            Ok([
-                welded_id(source, s, "source marker vertex")?,
-                welded_id(target, t, "target marker vertex")?,
-            ])
-        })
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    Ok(Markers::new(pairs))
+    let map = |w: &Weld, v: u32| w.to_welded().get(v as usize).copied().unwrap_or(v);
+    Ok(Markers::new(
+        m.pairs
+            .iter()
+            .map(|&[s, t]| [map(source, s), map(target, t)])
+            .collect(),
+    ))
 }
 
 /// A correspondence written for the input meshes, for the welded ones: vertex counts and
