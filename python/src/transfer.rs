@@ -457,7 +457,9 @@ impl PyTransfer {
             ));
         }
         let (inner, w) = (&self.inner, self.weld.as_ref());
-        one(py, &frame, |f| inner.transfer_frame(f).map(|x| unweld(w, x)))
+        one(py, &frame, |f| {
+            inner.transfer_frame(f).map(|x| unweld(w, x))
+        })
     }
 
     /// Every frame of `frames` (`(k, n_s, 3)` or a list) onto the target: `(k, n_t, 3)`.

@@ -96,7 +96,13 @@ impl Split {
             .zip(&upper)
             .map(|(t, &u)| {
                 t.iter()
-                    .map(|&i| new_index[if u && copy[i] != usize::MAX { copy[i] } else { i }])
+                    .map(|&i| {
+                        new_index[if u && copy[i] != usize::MAX {
+                            copy[i]
+                        } else {
+                            i
+                        }]
+                    })
                     .collect()
             })
             .collect();
@@ -221,7 +227,11 @@ impl Transfer {
         outputs.extend(frames.iter().cloned());
         let ss = Split::files(&inputs, &outputs, shuffle);
         let tgt = self.d.join(format!("{tag}-tgt.obj"));
-        let ts = Split::files(&[self.tgt.clone()], &[tgt.clone()], shuffle);
+        let ts = Split::files(
+            std::slice::from_ref(&self.tgt),
+            std::slice::from_ref(&tgt),
+            shuffle,
+        );
         (src, frames, tgt, ss, ts)
     }
 }
@@ -458,7 +468,10 @@ fn a_scene_welds_its_split_rig_and_maps_pulled_vertices() {
     let sc = scene(&a, &b, pulled, "ref.toml");
     ok(&["blend", "--scene", s(&sc), "--out", s(&reference)]);
     for (tag, shuffle) in [("appended", false), ("shuffled", true)] {
-        let (sa, sb) = (d.join(format!("{tag}-a.obj")), d.join(format!("{tag}-b.obj")));
+        let (sa, sb) = (
+            d.join(format!("{tag}-a.obj")),
+            d.join(format!("{tag}-b.obj")),
+        );
         let split = Split::files(&[a.clone(), b.clone()], &[sa.clone(), sb.clone()], shuffle);
         let sc = scene(&sa, &sb, split.id(pulled), &format!("{tag}.toml"));
         let (out, report) = (d.join(format!("{tag}-out")), d.join(format!("{tag}.json")));
@@ -491,7 +504,7 @@ fn info_counts_the_vertices_to_weld() {
     let a = d.join("a.obj");
     write_tube(&a, 12, 7, 1.0, 0.0);
     let sa = d.join("split.obj");
-    let split = Split::files(&[a.clone()], &[sa.clone()], true);
+    let split = Split::files(std::slice::from_ref(&a), std::slice::from_ref(&sa), true);
     let doc: Value = serde_json::from_str(&ok(&["info", "--json", s(&a), s(&sa)])).unwrap();
     assert_eq!(doc["files"][0]["welded_vertices"], 0);
     assert_eq!(doc["files"][1]["welded_vertices"], split.copies());

@@ -237,8 +237,8 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
         .with_context(|| format!("{}", args.markers.display()))?;
     crate::util::announce_work("computing the correspondence", target.num_vertices());
     let t0 = Instant::now();
-    let mut r = correspond(&welded_source, &welded_target, &welded_markers, &opts)
-        .with_context(|| {
+    let mut r =
+        correspond(&welded_source, &welded_target, &welded_markers, &opts).with_context(|| {
             format!(
                 "correspondence of {} and {}",
                 args.source.display(),
@@ -247,7 +247,8 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
         })?;
     let welded_corr = r.correspondence.clone();
     if !(source_weld.is_identity() && target_weld.is_identity()) {
-        r.correspondence = weld_util::input_correspondence(r.correspondence, &source_weld, &target_weld);
+        r.correspondence =
+            weld_util::input_correspondence(r.correspondence, &source_weld, &target_weld);
         // The input's markers as given (a welded vertex's first input vertex may be another).
         if r.correspondence.markers.len() == markers.pairs.len() && !r.correspondence.identity {
             r.correspondence.markers = markers.pairs.clone();

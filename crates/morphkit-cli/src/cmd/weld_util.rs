@@ -68,7 +68,11 @@ pub fn welded_markers(m: &Markers, source: &Weld, target: &Weld) -> anyhow::Resu
 
 /// A correspondence written for the input meshes, for the welded ones: vertex counts and
 /// markers mapped (one already welded, or of other counts, is left for `check` to judge).
-pub fn welded_correspondence(mut c: Correspondence, source: &Weld, target: &Weld) -> Correspondence {
+pub fn welded_correspondence(
+    mut c: Correspondence,
+    source: &Weld,
+    target: &Weld,
+) -> Correspondence {
     if (source.is_identity() && target.is_identity())
         || c.source_vertices != source.num_input()
         || c.target_vertices != target.num_input()

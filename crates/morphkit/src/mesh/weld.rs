@@ -63,7 +63,7 @@ impl Weld {
             return Self::identity(n);
         }
         let tol = tolerance * bbox_diagonal(base);
-        if n == 0 || !(tol > 0.0) || !tol.is_finite() {
+        if n == 0 || !tol.is_finite() || tol <= 0.0 {
             return Self::identity(n);
         }
         // Cells of side `tol`: a close pair lies in the same or a neighbouring cell.
@@ -168,7 +168,10 @@ impl Weld {
         if self.is_identity() {
             return mesh.clone();
         }
-        TriMesh::new(self.gather(&mesh.positions), self.triangles(&mesh.triangles))
+        TriMesh::new(
+            self.gather(&mesh.positions),
+            self.triangles(&mesh.triangles),
+        )
     }
 
     /// `mesh`'s triangles in welded numbering; triangles that lose a corner to the weld (they
