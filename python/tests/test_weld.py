@@ -116,3 +116,24 @@ def test_a_split_scene_solves_as_the_unsplit_one(rig):
     got = s.solve(0.5, frame=1.0)
     err = np.linalg.norm(got - want[origin], axis=1).max() / diag(V)
     assert err < 1e-9, err
+
+
+def test_a_split_target_transfers_as_the_unsplit_one():
+    VS, FS = tube()
+    VT, FT = tube(rings=30, around=16, radius=0.7)
+    markers = [[r * 12 + k, (r * 30 // 24) * 16 + k * 4 // 3] for r in (0, 12, 24) for k in (0, 3, 6, 9)]
+    frames = np.stack([bend(VS, a) for a in (0.5, 1.2)])
+    c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, markers)
+    want = morphkit.Transfer(VS, FS, VT, FT, c).transfer_many(frames)
+    (SVT,), SFT, origin = split([VT], FT, True)
+    last = {int(o): k for k, o in enumerate(origin)}
+    sm = [[s, last[t]] for s, t in markers]
+    sc = morphkit.Correspondence.from_markers(VS, FS, SVT, SFT, sm)
+    assert sc.matches == c.matches, "triangles keep their ids"
+    got = morphkit.Transfer(VS, FS, SVT, SFT, sc).transfer_many(frames)
+    assert got.shape == (2, len(SVT), 3)
+    err = np.linalg.norm(got - want[:, origin], axis=2).max() / diag(VT)
+    assert err < 1e-9, err
+    rig = morphkit.RigTransfer(VS, FS, SVT, SFT, sc).transfer_many(frames)
+    rig_want = morphkit.RigTransfer(VS, FS, VT, FT, c).transfer_many(frames)
+    assert np.linalg.norm(rig - rig_want[:, origin], axis=2).max() / diag(VT) < 1e-9
