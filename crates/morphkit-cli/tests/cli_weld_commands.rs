@@ -428,6 +428,39 @@ fn flex_welds_a_split_reference() {
     let _ = std::fs::remove_dir_all(&t.d);
 }
 
+#[test]
+fn flex_on_a_split_target_is_the_unsplit_one() {
+    let t = Transfer::new("weld-flex-target");
+    let run = |src: &Path, frames: &[PathBuf], tgt: &Path, m: &Path, tag: &str| {
+        let (ply, j) = (
+            t.d.join(format!("{tag}.ply")),
+            t.d.join(format!("{tag}.json")),
+        );
+        let mut a = vec!["flex", "--reference", s(src), "--frames"];
+        a.extend(frames.iter().map(|p| s(p)));
+        a.extend(["--target", s(tgt), "--markers", s(m)]);
+        a.extend(["--out", s(&ply), "--json", s(&j)]);
+        ok(&a);
+        json(&j)
+    };
+    let m = t.markers("m.json", |q| q);
+    let want = run(&t.src, &t.frames, &t.tgt, &m, "ref");
+    let want: Vec<f64> = serde_json::from_value(want["flexibility"].clone()).unwrap();
+    let (src, frames, tgt, ss, ts) = t.split("shuffled", true);
+    let m = t.markers("split-m.json", |[a, b]| [ss.id(a), ts.id(b)]);
+    let r = run(&src, &frames, &tgt, &m, "split");
+    assert_eq!(r["welded_vertices"]["target"], ts.copies());
+    let got: Vec<f64> = serde_json::from_value(r["flexibility"].clone()).unwrap();
+    assert_eq!(got.len(), want.len(), "one value per target triangle");
+    let e = got
+        .iter()
+        .zip(&want)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(e < 1e-9, "{e}");
+    let _ = std::fs::remove_dir_all(&t.d);
+}
+
 const SCENE: &str = r#"
 base = "BASE"
 targets = ["TARGET"]

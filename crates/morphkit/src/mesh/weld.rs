@@ -278,4 +278,25 @@ mod tests {
         assert!(w.is_identity());
         assert_eq!(w.shapes(&shapes).unwrap().num_vertices(), s.num_vertices());
     }
+
+    #[test]
+    fn a_single_mesh_welds_its_coincident_vertices_and_keeps_its_triangles() {
+        let m = generate::grid(5, 4, 1.0, 1.0);
+        let s = split(&m, &[6, 7, 8]);
+        let w = Weld::of_mesh(&s, WELD_TOLERANCE);
+        assert_eq!(w.merged(), 3);
+        assert!(w.keeps_triangles(&s.triangles));
+        assert_eq!(w.mesh(&s), m);
+        assert_eq!(w.representative().len(), m.num_vertices());
+        // Sets of other vertex counts weld nothing.
+        let other = vec![[0.0; 3]; 2];
+        assert!(Weld::of_positions(&[&s.positions, &other], WELD_TOLERANCE).is_identity());
+        // A triangle with two coincident corners would be lost.
+        let mut p = m.positions.clone();
+        p[1] = p[0];
+        assert!(
+            !Weld::of_mesh(&TriMesh::new(p, m.triangles.clone()), WELD_TOLERANCE)
+                .keeps_triangles(&m.triangles)
+        );
+    }
 }
