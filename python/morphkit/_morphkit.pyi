@@ -69,6 +69,7 @@ class PhysicalBlend:
         sampled_start: bool = True,
         interior: Optional[str] = None,
         anchor: Optional[str] = None,
+        weld: bool = True,  # split seam/hard-edge vertices are one vertex for the solve
     ) -> None: ...
     def solve(
         self,
@@ -94,6 +95,8 @@ class PhysicalBlend:
     def summary(self) -> Dict[str, Any]: ...
     @property
     def num_targets(self) -> int: ...
+    @property
+    def welded_vertices(self) -> int: ...  # input vertices welded into others for the solve
 
 class Predictor:
     def predict(self, weights: Union[float, Sequence[float]], *, convex: bool = False) -> Vertices: ...
@@ -108,6 +111,7 @@ class Correspondence:
         markers: Union[PathLike, Sequence[Sequence[int]], ArrayLike],
         *,
         refine: bool = False,
+        weld: bool = True,  # split seam vertices are one vertex while warping
     ) -> "Correspondence": ...
     @staticmethod
     def identity(v: ArrayLike, f: ArrayLike) -> "Correspondence": ...
@@ -137,6 +141,7 @@ class Transfer:
         local_stretch: bool = False,
         area_weighted: bool = False,
         fold_guard: bool = True,
+        weld: bool = True,  # the target's split seam vertices are one vertex for the solve
     ) -> None: ...
     def transfer(self, frame: ArrayLike) -> Vertices: ...
     def transfer_many(self, frames: Union[ArrayLike, Sequence[ArrayLike]]) -> Frames: ...
@@ -205,6 +210,7 @@ class SceneBlend:
         max_rounds: int = 10,  # >= 0
         interior: Optional[str] = None,
         anchor: Optional[str] = None,
+        weld: bool = True,  # as PhysicalBlend: split seam vertices are one vertex
     ) -> None: ...
     def solve(self, weights: Union[float, Sequence[float]], *, frame: float = 0.0, convex: bool = False) -> Vertices: ...
     def solve_many(
@@ -229,6 +235,7 @@ class RigTransfer:
         correspondence: Correspondence,
         *,
         combine: str = "inverse-distance",
+        weld: bool = True,  # the target's split seam vertices are one vertex for the solve
     ) -> None: ...
     def transfer(self, shape: ArrayLike) -> Vertices: ...
     def transfer_many(self, shapes: Union[ArrayLike, Sequence[ArrayLike]]) -> Frames: ...

@@ -14,7 +14,7 @@ use crate::arrays::{self, to_array, to_array3};
 use crate::dict::to_dict;
 use crate::errors::{chain, new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
-use morphkit::mesh::ShapeSet;
+use morphkit::mesh::{Point, ShapeSet, Weld, WELD_TOLERANCE};
 use morphkit::springs::{
     AnchorOptions, AnchorPlacement, BlendOptions, FixedVertices, FrameStats, InteriorMode,
     InteriorOptions, PhysicalBlend, PointTarget, SurfacePredictor, VolumetricBlend, Weights,
@@ -22,7 +22,7 @@ use morphkit::springs::{
 use numpy::{PyArray2, PyArray3};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use std::sync::{Mutex, MutexGuard, PoisonError};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 /// The physical blend of a base shape and its targets (Ma et al. 2012).
 ///
@@ -50,8 +50,58 @@ pub struct PyPhysicalBlend {
     summary: serde_json::Value,
     targets: usize,
     vertices: usize,
+    /// The weld the solver works on (`None`: nothing welded, the input's own layout).
+    weld: Option<Arc<Weld>>,
     /// Statistics of the last solve that finished.
     last: Mutex<Option<FrameStats>>,
+}
+
+/// The weld of `shapes` for a solve (`weld=True`), or `None` where nothing is welded (then
+/// nothing is copied or mapped: results are bit-identical to an unwelded solve).
+pub(crate) fn shape_weld(shapes: &ShapeSet, weld: bool) -> Option<Arc<Weld>> {
+    if !weld {
+        return None;
+    }
+    let w = Weld::of_shapes(shapes, WELD_TOLERANCE);
+    (!w.is_identity()).then(|| Arc::new(w))
+}
+
+/// `positions` of the welded mesh in the input's layout (as they are without a weld).
+pub(crate) fn unweld(weld: Option<&Weld>, positions: Vec<Point>) -> Vec<Point> {
+    match weld {
+        Some(w) => w.scatter(&positions),
+        None => positions,
+    }
+}
+
+/// Fixed vertex ids (input numbering, checked) in welded numbering.
+pub(crate) fn weld_fixed(weld: Option<&Weld>, fixed: FixedVertices) -> FixedVertices {
+    match (weld, fixed) {
+        (Some(w), FixedVertices::Ids(ids)) => {
+            let mut ids: Vec<u32> = ids.iter().map(|&v| w.to_welded()[v as usize]).collect();
+            ids.sort_unstable();
+            ids.dedup();
+            FixedVertices::Ids(ids)
+        }
+        (_, f) => f,
+    }
+}
+
+/// Statistics of a welded solve in input numbering: the unconverged vertices are every input
+/// vertex of an unconverged welded one.
+pub(crate) fn unweld_stats(weld: Option<&Weld>, mut stats: FrameStats) -> FrameStats {
+    if let Some(w) = weld {
+        if !stats.unconverged_vertices.is_empty() {
+            let mut failed = vec![false; w.num_welded()];
+            for &v in &stats.unconverged_vertices {
+                failed[v as usize] = true;
+            }
+            stats.unconverged_vertices = (0..w.num_input() as u32)
+                .filter(|&v| failed[w.to_welded()[v as usize] as usize])
+                .collect();
+        }
+    }
+    stats
 }
 
 /// Locks `m`, also after a panic in a solve (a library bug, raised as Python's
@@ -277,10 +327,15 @@ impl PyPhysicalBlend {
     /// tetgen); `anchor="auto"` (or `"x,y,z[,size]"`) adds the rigid interior anchor
     /// (Sec. 3.4), which then holds the body instead of fixed vertices: the strings of
     /// `morphkit blend --interior/--anchor`. `summary["interior"]` reports what was built.
+    /// `weld` (default True): vertices split at seams and hard edges (coincident in every
+    /// shape within 1e-6 of the base's diagonal) are one vertex for the solve, so seams never
+    /// open; results, `fixed` and `pulls` ids and `last_stats` stay in the caller's layout;
+    /// :attr:`welded_vertices` and `summary["welded_vertices"]` say how many were welded. A
+    /// mesh with nothing to weld solves exactly as with `weld=False`.
     #[new]
     #[pyo3(signature = (base, targets, faces, *, fixed=None, hinge_weight=None,
         tether=None, kinematic_stretch=None, thin_band_rings=None, gradient_tolerance=None,
-        max_newton_iterations=None, sampled_start=true, interior=None, anchor=None))]
+        max_newton_iterations=None, sampled_start=true, interior=None, anchor=None, weld=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -297,6 +352,7 @@ impl PyPhysicalBlend {
         sampled_start: bool,
         interior: Option<&str>,
         anchor: Option<&str>,
+        weld: bool,
     ) -> PyResult<Self> {
         let thin_band_rings = args::opt_count("thin_band_rings", thin_band_rings, Kind::Blend, 0)?;
         let max_newton_iterations = args::opt_count(
@@ -305,10 +361,22 @@ impl PyPhysicalBlend {
             Kind::Blend,
             0,
         )?;
-        let shapes = shape_set(base, targets, faces)?;
-        let (n, k) = (shapes.num_vertices(), shapes.len() - 1);
+        let input = shape_set(base, targets, faces)?;
+        let (n, k) = (input.num_vertices(), input.len() - 1);
+        let weld = shape_weld(&input, weld);
+        let fixed = weld_fixed(weld.as_deref(), fixed_vertices(fixed, n)?);
+        // Split seams and hard edges are one vertex for the solve; results go back in the
+        // caller's layout.
+        let welded;
+        let shapes = match &weld {
+            Some(w) => {
+                welded = w.shapes(&input).py(Kind::Mesh)?;
+                &welded
+            }
+            None => &input,
+        };
         let mut opts = BlendOptions {
-            fixed: fixed_vertices(fixed, n)?,
+            fixed,
             sampled_start,
             ..BlendOptions::default()
         };
@@ -334,14 +402,14 @@ impl PyPhysicalBlend {
         let (inner, predictor, summary) =
             if io.mode == InteriorMode::None && ao.placement == AnchorPlacement::None {
                 let b = py
-                    .detach(|| PhysicalBlend::new(&shapes, &opts))
+                    .detach(|| PhysicalBlend::new(shapes, &opts))
                     .py(Kind::Blend)?;
                 let predictor = SurfacePredictor::from(b.predictor());
                 let summary = json(b.summary())?;
                 (Solver::Surface(Box::new(b)), predictor, summary)
             } else {
                 let b = py
-                    .detach(|| VolumetricBlend::new(&shapes, &opts, &io, &ao))
+                    .detach(|| VolumetricBlend::new(shapes, &opts, &io, &ao))
                     .py(Kind::Blend)?;
                 let mut summary = json(b.physical().summary())?;
                 if let serde_json::Value::Object(m) = &mut summary {
@@ -350,12 +418,20 @@ impl PyPhysicalBlend {
                 let predictor = b.predictor();
                 (Solver::Volume(Box::new(b)), predictor, summary)
             };
+        let mut summary = summary;
+        if let serde_json::Value::Object(m) = &mut summary {
+            m.insert(
+                "welded_vertices".into(),
+                weld.as_ref().map_or(0, |w| w.merged()).into(),
+            );
+        }
         Ok(Self {
             inner: Mutex::new(inner),
             predictor,
             summary,
             targets: k,
             vertices: n,
+            weld,
             last: Mutex::new(None),
         })
     }
@@ -377,7 +453,13 @@ impl PyPhysicalBlend {
         pulls: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let w = self::weights(weights, convex, self.targets)?;
-        let targets = self::pulls(pulls, self.vertices)?;
+        let mut targets = self::pulls(pulls, self.vertices)?;
+        let weld = self.weld.as_deref();
+        if let Some(wd) = weld {
+            for t in &mut targets {
+                t.vertex = wd.to_welded()[t.vertex as usize];
+            }
+        }
         let positions = py
             .detach(|| {
                 let mut solver = lock(&self.inner);
@@ -388,8 +470,8 @@ impl PyPhysicalBlend {
                     Solver::Volume(b) => b.solve_with(&w, &targets).map(|r| (r.positions, r.stats)),
                 };
                 r.map(|(positions, stats)| {
-                    *lock(&self.last) = Some(stats);
-                    positions
+                    *lock(&self.last) = Some(unweld_stats(weld, stats));
+                    unweld(weld, positions)
                 })
             })
             .py(Kind::Blend)?;
@@ -428,12 +510,15 @@ impl PyPhysicalBlend {
             };
             if let Some(Ok((_, stats))) = results.last() {
                 if results.iter().all(Result::is_ok) {
-                    *lock(&self.last) = Some(stats.clone());
+                    *lock(&self.last) = Some(unweld_stats(self.weld.as_deref(), stats.clone()));
                 }
             }
             results
         })?;
-        let frames: Vec<_> = frames.into_iter().map(|(p, _)| p).collect();
+        let frames: Vec<_> = frames
+            .into_iter()
+            .map(|(p, _)| unweld(self.weld.as_deref(), p))
+            .collect();
         Ok(to_array3(py, &frames, self.vertices))
     }
 
@@ -454,7 +539,15 @@ impl PyPhysicalBlend {
     /// another thread. With `interior` or `anchor` it predicts the volumetric solve's start
     /// (the interior carried along), on the input surface in world coordinates.
     fn predictor(&self) -> PyResult<PyPredictor> {
-        Ok(PyPredictor::new(self.predictor.clone(), self.targets))
+        Ok(PyPredictor::new(self.predictor.clone(), self.targets).welded(self.weld.clone()))
+    }
+
+    /// How many of the input's vertices were welded into others for the solve: vertices split
+    /// at seams and hard edges (coincident in every shape, within 1e-6 of the base's diagonal)
+    /// are one vertex, and results come back in the input's layout; 0 with `weld=False`.
+    #[getter]
+    fn welded_vertices(&self) -> usize {
+        self.weld.as_ref().map_or(0, |w| w.merged())
     }
 
     /// Statistics of the last solve as a dict (Newton iterations, factorizations, gradient
@@ -500,11 +593,23 @@ impl PyPhysicalBlend {
 pub struct PyPredictor {
     inner: SurfacePredictor,
     targets: usize,
+    /// The weld of the blend it predicts for (`None`: none).
+    weld: Option<Arc<Weld>>,
 }
 
 impl PyPredictor {
     pub fn new(inner: SurfacePredictor, targets: usize) -> Self {
-        Self { inner, targets }
+        Self {
+            inner,
+            targets,
+            weld: None,
+        }
+    }
+
+    /// Predictions scattered back through `weld` (that of the blend's welded rig).
+    pub fn welded(mut self, weld: Option<Arc<Weld>>) -> Self {
+        self.weld = weld;
+        self
     }
 }
 
@@ -521,7 +626,10 @@ impl PyPredictor {
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let w = self::weights(weights, convex, self.targets)?;
         let inner = &self.inner;
-        let p = py.detach(|| inner.predict(&w)).py(Kind::Blend)?;
+        let weld = self.weld.as_deref();
+        let p = py
+            .detach(|| inner.predict(&w).map(|p| unweld(weld, p)))
+            .py(Kind::Blend)?;
         Ok(to_array(py, &p))
     }
 

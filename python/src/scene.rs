@@ -7,9 +7,9 @@ use crate::blend::{lock, solve_in_chunks};
 use crate::dict::to_dict;
 use crate::errors::{chain, new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
-use morphkit::mesh::Point;
+use morphkit::mesh::{Point, Weld};
 use morphkit::scene::{
     CollisionOptions, Obstacle, Primitive, Pull, PullKey, PullKind, RigidKey, Rotation, SceneBlend,
     SceneFrame,
@@ -148,20 +148,34 @@ pub struct PySceneBlend {
     /// Its predictor without obstacles and pulls (no lock).
     predictor: SurfacePredictor,
     targets: usize,
+    /// The weld the solver works on (`None`: nothing welded; see `PhysicalBlend`).
+    weld: Option<Arc<Weld>>,
     /// The last finished frame, without its positions (what `last_stats` reports).
     last: Mutex<Option<SceneFrame>>,
 }
 
-/// `r` kept for `last_stats` (positions dropped) and its positions.
-fn keep(last: &Mutex<Option<SceneFrame>>, mut r: SceneFrame) -> Vec<Point> {
+/// `r` kept for `last_stats` (positions dropped, vertex ids in input numbering) and its
+/// positions in the input's layout.
+fn keep(last: &Mutex<Option<SceneFrame>>, weld: Option<&Weld>, mut r: SceneFrame) -> Vec<Point> {
     let positions = std::mem::take(&mut r.positions);
     r.extra = Vec::new();
+    if let Some(w) = weld {
+        for c in &mut r.contacts {
+            c.vertex = w.representative()[c.vertex as usize];
+        }
+    }
+    r.solver = crate::blend::unweld_stats(weld, r.solver);
     *lock(last) = Some(r);
-    positions
+    crate::blend::unweld(weld, positions)
 }
 
 /// `(vertex, [(frame, (x, y, z)), …])` of a mesh of `vertices` vertices, the `i`th pull.
-fn pull_of(i: usize, obj: &Bound<'_, PyAny>, vertices: usize) -> PyResult<Pull> {
+fn pull_of(
+    i: usize,
+    obj: &Bound<'_, PyAny>,
+    vertices: usize,
+    weld: Option<&Weld>,
+) -> PyResult<Pull> {
     let (v, keys) = obj
         .extract::<(Bound<'_, PyAny>, Vec<(f64, [f64; 3])>)>()
         .map_err(|_| {
@@ -180,6 +194,7 @@ fn pull_of(i: usize, obj: &Bound<'_, PyAny>, vertices: usize) -> PyResult<Pull> 
         .into_iter()
         .map(|(frame, position)| PullKey { frame, position })
         .collect();
+    let v = weld.map_or(v, |w| w.to_welded()[v as usize]);
     Pull::new(v, keys, PullKind::Hard).py(Kind::Blend)
 }
 
@@ -188,9 +203,10 @@ impl PySceneBlend {
     #[new]
     #[pyo3(signature = (base, targets, faces, *, obstacles=Vec::new(), pulls=Vec::new(),
         fixed=None, hinge_weight=None, tolerance=1e-4, max_rounds=None, interior=None,
-        anchor=None),
+        anchor=None, weld=true),
         text_signature = "(base, targets, faces, *, obstacles=(), pulls=(), fixed=None, \
-            hinge_weight=None, tolerance=1e-4, max_rounds=10, interior=None, anchor=None)")]
+            hinge_weight=None, tolerance=1e-4, max_rounds=10, interior=None, anchor=None, \
+            weld=True)")]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -205,14 +221,28 @@ impl PySceneBlend {
         max_rounds: Option<&Bound<'_, PyAny>>,
         interior: Option<&str>,
         anchor: Option<&str>,
+        weld: bool,
     ) -> PyResult<Self> {
         let max_rounds = args::opt_count("max_rounds", max_rounds, Kind::Blend, 0)?
             .unwrap_or(CollisionOptions::default().max_rounds);
         let (io, ao) = crate::blend::volume_options(interior, anchor)?;
-        let shapes = crate::blend::shape_set(base, targets, faces)?;
-        let (n, k) = (shapes.num_vertices(), shapes.len() - 1);
+        let input = crate::blend::shape_set(base, targets, faces)?;
+        let (n, k) = (input.num_vertices(), input.len() - 1);
+        // Split seams and hard edges are one vertex for the solve (as in PhysicalBlend).
+        let weld = crate::blend::shape_weld(&input, weld);
+        let welded;
+        let shapes = match &weld {
+            Some(w) => {
+                welded = w.shapes(&input).py(Kind::Mesh)?;
+                &welded
+            }
+            None => &input,
+        };
         let mut opts = BlendOptions {
-            fixed: crate::blend::fixed_vertices(fixed, n)?,
+            fixed: crate::blend::weld_fixed(
+                weld.as_deref(),
+                crate::blend::fixed_vertices(fixed, n)?,
+            ),
             ..BlendOptions::default()
         };
         if let Some(w) = hinge_weight {
@@ -221,7 +251,7 @@ impl PySceneBlend {
         let pulls = pulls
             .iter()
             .enumerate()
-            .map(|(i, p)| pull_of(i, p, n))
+            .map(|(i, p)| pull_of(i, p, n, weld.as_deref()))
             .collect::<PyResult<Vec<_>>>()?;
         let obstacles = obstacles.iter().map(|o| o.get().inner.clone()).collect();
         let col = CollisionOptions {
@@ -229,12 +259,13 @@ impl PySceneBlend {
             max_rounds,
         };
         let inner = py
-            .detach(|| SceneBlend::with_interior(&shapes, &opts, &io, &ao, obstacles, pulls, &col))
+            .detach(|| SceneBlend::with_interior(shapes, &opts, &io, &ao, obstacles, pulls, &col))
             .py(Kind::Blend)?;
         Ok(Self {
             predictor: inner.surface_predictor(),
             inner: Mutex::new(inner),
             targets: k,
+            weld,
             last: Mutex::new(None),
         })
     }
@@ -255,7 +286,7 @@ impl PySceneBlend {
             .detach(|| {
                 let mut solver = lock(&self.inner);
                 let r = solver.solve(frame, &w)?;
-                Ok::<_, morphkit::scene::SceneError>(keep(&self.last, r))
+                Ok::<_, morphkit::scene::SceneError>(keep(&self.last, self.weld.as_deref(), r))
             })
             .py(Kind::Blend)?;
         Ok(to_array(py, &positions))
@@ -300,8 +331,8 @@ impl PySceneBlend {
                 .enumerate()
                 .map(|(k, r)| match r {
                     // The chunk's last frame is kept for `last_stats` when all succeeded.
-                    Ok(f) if ok && k + 1 == n => Ok(keep(&self.last, f)),
-                    Ok(f) => Ok(f.positions),
+                    Ok(f) if ok && k + 1 == n => Ok(keep(&self.last, self.weld.as_deref(), f)),
+                    Ok(f) => Ok(crate::blend::unweld(self.weld.as_deref(), f.positions)),
                     Err(e) => Err(chain(&e)),
                 })
                 .collect()
@@ -315,10 +346,10 @@ impl PySceneBlend {
     /// `interior` or `anchor` it predicts the volumetric solve's start, on the input surface
     /// in world coordinates.
     fn predictor(&self) -> PyResult<crate::blend::PyPredictor> {
-        Ok(crate::blend::PyPredictor::new(
-            self.predictor.clone(),
-            self.targets,
-        ))
+        Ok(
+            crate::blend::PyPredictor::new(self.predictor.clone(), self.targets)
+                .welded(self.weld.clone()),
+        )
     }
 
     /// The last frame's statistics: `solver` (as :attr:`PhysicalBlend.last_stats`),

@@ -7,7 +7,7 @@ use crate::arrays::{self, to_array, to_array3};
 use crate::dict::to_dict;
 use crate::errors::{new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
-use morphkit::mesh::TriMesh;
+use morphkit::mesh::{Point, TriMesh, Weld, WELD_TOLERANCE};
 use morphkit::transfer::rig::{RigOptions, RigTransfer};
 use morphkit::transfer::{
     correspond, match_confidence, AnimationTransfer, Correspondence, CorrespondenceOptions,
@@ -28,6 +28,68 @@ pub struct PyCorrespondence {
     pub inner: Correspondence,
     /// The warped meshes (only after `from_markers`).
     warped: Option<(Vec<morphkit::mesh::Point>, Vec<morphkit::mesh::Point>)>,
+}
+
+/// The weld of one mesh for a solve (as the CLI's): vertices split at seams and hard edges
+/// (coincident within 1e-6 of the diagonal) are one vertex; `None` where nothing is welded,
+/// `weld` is false, or a triangle would be lost (triangles keep their ids).
+fn mesh_weld(mesh: &TriMesh, weld: bool) -> Option<Weld> {
+    if !weld {
+        return None;
+    }
+    let w = Weld::of_mesh(mesh, WELD_TOLERANCE);
+    (!w.is_identity() && w.keeps_triangles(&mesh.triangles)).then_some(w)
+}
+
+/// Vertex `v` through `map` (a vertex of another numbering), unchanged outside it.
+fn remap(map: &[u32], v: &mut u32) {
+    if let Some(&x) = map.get(*v as usize) {
+        *v = x;
+    }
+}
+
+/// A correspondence between numberings: counts and marker vertices of the source and target
+/// through `source`/`target` (`(map, new count)`; `None`: unchanged).
+fn renumber(
+    mut c: Correspondence,
+    source: Option<(&[u32], usize)>,
+    target: Option<(&[u32], usize)>,
+) -> Correspondence {
+    if c.identity {
+        return c;
+    }
+    if let Some((m, n)) = source {
+        c.source_vertices = n;
+        c.markers.iter_mut().for_each(|p| remap(m, &mut p[0]));
+        c.marker_residuals
+            .iter_mut()
+            .for_each(|r| remap(m, &mut r.source));
+    }
+    if let Some((m, n)) = target {
+        c.target_vertices = n;
+        c.markers.iter_mut().for_each(|p| remap(m, &mut p[1]));
+        c.marker_residuals
+            .iter_mut()
+            .for_each(|r| remap(m, &mut r.target));
+    }
+    c
+}
+
+/// A correspondence of the input target, for its welded mesh (one of another vertex count is
+/// left for the transfer to refuse).
+fn welded_target_corr(c: &Correspondence, w: &Weld) -> Correspondence {
+    if c.target_vertices != w.num_input() {
+        return c.clone();
+    }
+    renumber(c.clone(), None, Some((w.to_welded(), w.num_welded())))
+}
+
+/// `x` of the welded target in the input's layout.
+fn unweld(w: Option<&Weld>, x: Vec<Point>) -> Vec<Point> {
+    match w {
+        Some(w) => w.scatter(&x),
+        None => x,
+    }
 }
 
 /// Marker pairs: the path of a markers JSON file, or `(source, target)` vertex pairs, the
@@ -65,7 +127,11 @@ impl PyCorrespondence {
     /// `refine=True` then refines it by closest points (Sumner & Popović 2004, Sec. 5), as
     /// `morphkit correspond --refine`.
     #[staticmethod]
-    #[pyo3(signature = (vs, fs, vt, ft, markers, *, refine=false))]
+    ///
+    /// `weld` (default True): vertices split at seams and hard edges are one vertex while the
+    /// meshes are warped (as `morphkit correspond`); the correspondence and `warped` are of
+    /// the meshes as given.
+    #[pyo3(signature = (vs, fs, vt, ft, markers, *, refine=false, weld=true))]
     #[allow(clippy::too_many_arguments)]
     fn from_markers(
         py: Python<'_>,
@@ -75,6 +141,7 @@ impl PyCorrespondence {
         ft: &Bound<'_, PyAny>,
         markers: &Bound<'_, PyAny>,
         refine: bool,
+        weld: bool,
     ) -> PyResult<Self> {
         let source = from_arrays("source", vs, fs)?;
         let target = from_arrays("target", vt, ft)?;
@@ -83,7 +150,25 @@ impl PyCorrespondence {
             Elements::vertices(source.num_vertices()),
             Elements::vertices(target.num_vertices()),
         )?;
-        let r = py
+        let (sw, tw) = (mesh_weld(&source, weld), mesh_weld(&target, weld));
+        let given = markers.clone();
+        let markers = Markers::new(
+            markers
+                .pairs
+                .iter()
+                .map(|&[a, b]| {
+                    [
+                        sw.as_ref().map_or(a, |w| w.to_welded()[a as usize]),
+                        tw.as_ref().map_or(b, |w| w.to_welded()[b as usize]),
+                    ]
+                })
+                .collect(),
+        );
+        let (source, target) = (
+            sw.as_ref().map_or(source.clone(), |w| w.mesh(&source)),
+            tw.as_ref().map_or(target.clone(), |w| w.mesh(&target)),
+        );
+        let mut r = py
             .detach(|| {
                 correspond(
                     &source,
@@ -96,6 +181,18 @@ impl PyCorrespondence {
                 )
             })
             .py(Kind::Transfer)?;
+        if sw.is_some() || tw.is_some() {
+            // Back to the meshes as given: counts, markers as given, warped vertices scattered.
+            fn back(w: &Option<Weld>) -> Option<(&[u32], usize)> {
+                w.as_ref().map(|w| (w.representative(), w.num_input()))
+            }
+            r.correspondence = renumber(r.correspondence, back(&sw), back(&tw));
+            if !r.correspondence.identity {
+                r.correspondence.markers = given.pairs;
+            }
+            r.warped_source = unweld(sw.as_ref(), r.warped_source);
+            r.warped_target = unweld(tw.as_ref(), r.warped_target);
+        }
         Ok(Self {
             inner: r.correspondence,
             warped: Some((r.warped_source, r.warped_target)),
@@ -218,6 +315,32 @@ pub struct PyTransfer {
     inner: AnimationTransfer,
     source_vertices: usize,
     target_vertices: usize,
+    /// The target's weld (`None`: nothing welded).
+    weld: Option<Weld>,
+}
+
+/// [`build`] with the target welded (`weld`): `make` gets the source, the welded target and
+/// the correspondence for it; returns what it built, the two input vertex counts and the weld.
+#[allow(clippy::type_complexity)]
+fn build_welded<T: Send, E: std::error::Error + Send>(
+    py: Python<'_>,
+    [vs, fs, vt, ft]: [&Bound<'_, PyAny>; 4],
+    corr: &Correspondence,
+    weld: bool,
+    make: impl FnOnce(&TriMesh, &TriMesh, &Correspondence) -> Result<T, E> + Send,
+) -> PyResult<(T, usize, usize, Option<Weld>)> {
+    let source = from_arrays("source", vs, fs)?;
+    let target = from_arrays("target", vt, ft)?;
+    let w = mesh_weld(&target, weld);
+    let inner = match &w {
+        None => py.detach(|| make(&source, &target, corr)),
+        Some(w) => {
+            let (t, c) = (w.mesh(&target), welded_target_corr(corr, w));
+            py.detach(|| make(&source, &t, &c))
+        }
+    }
+    .py(Kind::Transfer)?;
+    Ok((inner, source.num_vertices(), target.num_vertices(), w))
 }
 
 /// Reads the source and target meshes `[V_s, F_s, V_t, F_t]` and runs the set-up `make` on
@@ -251,7 +374,8 @@ fn combine_of(name: &str) -> PyResult<GradientCombine> {
 impl PyTransfer {
     #[new]
     #[pyo3(signature = (vs, fs, vt, ft, correspondence, *, combine="inverse-distance",
-        translation="follow", local_stretch=false, area_weighted=false, fold_guard=true))]
+        translation="follow", local_stretch=false, area_weighted=false, fold_guard=true,
+        weld=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -265,6 +389,7 @@ impl PyTransfer {
         local_stretch: bool,
         area_weighted: bool,
         fold_guard: bool,
+        weld: bool,
     ) -> PyResult<Self> {
         if !fold_guard && !local_stretch {
             return Err(new_err(
@@ -298,14 +423,18 @@ impl PyTransfer {
         if !fold_guard {
             opts.fold_guard = None;
         }
-        let corr = &correspondence.inner;
-        let (inner, source_vertices, target_vertices) = build(py, [vs, fs, vt, ft], |s, t| {
-            AnimationTransfer::new(s, t, corr, &opts)
-        })?;
+        let (inner, source_vertices, target_vertices, weld) = build_welded(
+            py,
+            [vs, fs, vt, ft],
+            &correspondence.inner,
+            weld,
+            |s, t, c| AnimationTransfer::new(s, t, c, &opts),
+        )?;
         Ok(Self {
             inner,
             source_vertices,
             target_vertices,
+            weld,
         })
     }
 
@@ -327,8 +456,10 @@ impl PyTransfer {
                 ),
             ));
         }
-        let inner = &self.inner;
-        one(py, &frame, |f| inner.transfer_frame(f))
+        let (inner, w) = (&self.inner, self.weld.as_ref());
+        one(py, &frame, |f| {
+            inner.transfer_frame(f).map(|x| unweld(w, x))
+        })
     }
 
     /// Every frame of `frames` (`(k, n_s, 3)` or a list) onto the target: `(k, n_t, 3)`.
@@ -337,12 +468,12 @@ impl PyTransfer {
         py: Python<'py>,
         frames: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        let inner = &self.inner;
+        let (inner, w) = (&self.inner, self.weld.as_ref());
         many(
             py,
             ("frames", frames),
             (self.source_vertices, self.target_vertices),
-            |_, f| inner.transfer_frame(f),
+            |_, f| inner.transfer_frame(f).map(|x| unweld(w, x)),
         )
     }
 
@@ -367,12 +498,14 @@ pub struct PyRigTransfer {
     inner: RigTransfer,
     source_vertices: usize,
     target_vertices: usize,
+    /// The target's weld (`None`: nothing welded).
+    weld: Option<Weld>,
 }
 
 #[pymethods]
 impl PyRigTransfer {
     #[new]
-    #[pyo3(signature = (vs, fs, vt, ft, correspondence, *, combine="inverse-distance"))]
+    #[pyo3(signature = (vs, fs, vt, ft, correspondence, *, combine="inverse-distance", weld=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -382,6 +515,7 @@ impl PyRigTransfer {
         ft: &Bound<'_, PyAny>,
         correspondence: &PyCorrespondence,
         combine: &str,
+        weld: bool,
     ) -> PyResult<Self> {
         let opts = RigOptions {
             transfer: TransferOptions {
@@ -389,14 +523,18 @@ impl PyRigTransfer {
                 ..TransferOptions::default()
             },
         };
-        let corr = &correspondence.inner;
-        let (inner, source_vertices, target_vertices) = build(py, [vs, fs, vt, ft], |s, t| {
-            RigTransfer::new(s, t, corr, &opts)
-        })?;
+        let (inner, source_vertices, target_vertices, weld) = build_welded(
+            py,
+            [vs, fs, vt, ft],
+            &correspondence.inner,
+            weld,
+            |s, t, c| RigTransfer::new(s, t, c, &opts),
+        )?;
         Ok(Self {
             inner,
             source_vertices,
             target_vertices,
+            weld,
         })
     }
 
@@ -407,8 +545,10 @@ impl PyRigTransfer {
         shape: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let shape = arrays::points("shape", shape)?;
-        let inner = &self.inner;
-        one(py, &shape, |s| inner.transfer_shape(0, s).map(|(x, _)| x))
+        let (inner, w) = (&self.inner, self.weld.as_ref());
+        one(py, &shape, |s| {
+            inner.transfer_shape(0, s).map(|(x, _)| unweld(w, x))
+        })
     }
 
     /// Every expression of `shapes` (`(k, n_s, 3)` or a list) onto the target: `(k, n_t, 3)`.
@@ -417,12 +557,12 @@ impl PyRigTransfer {
         py: Python<'py>,
         shapes: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        let inner = &self.inner;
+        let (inner, w) = (&self.inner, self.weld.as_ref());
         many(
             py,
             ("shapes", shapes),
             (self.source_vertices, self.target_vertices),
-            |i, s| inner.transfer_shape(i, s).map(|(x, _)| x),
+            |i, s| inner.transfer_shape(i, s).map(|(x, _)| unweld(w, x)),
         )
     }
 }

@@ -1,6 +1,7 @@
 //! `morphkit correspond`: a triangle correspondence between two meshes from marker pairs
 //! (Wang & Lee 2008, Sec. 3.1.2–3.1.3), saved once as JSON for `transfer` and synthesis.
 
+use super::weld_util;
 use crate::outputs::{Kind, Plan};
 use crate::util::{check_positive, check_range};
 use anyhow::Context;
@@ -224,15 +225,37 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
     let source = io::read_mesh(&args.source)?;
     let target = io::read_mesh(&args.target)?;
     let markers = Markers::read(&args.markers)?;
+    // Split seams and hard edges are one vertex for the solves (mesh::weld): the
+    // correspondence is computed on the welded meshes (markers mapped) and written for the
+    // input ones (triangles keep their ids, markers their input vertices).
+    let source_weld = weld_util::mesh_weld(&source, &[]);
+    let target_weld = weld_util::mesh_weld(&target, &[]);
+    weld_util::announce(&source_weld, "the source");
+    weld_util::announce(&target_weld, "the target");
+    let (welded_source, welded_target) = (source_weld.mesh(&source), target_weld.mesh(&target));
+    let welded_markers = weld_util::welded_markers(&markers, &source_weld, &target_weld)
+        .with_context(|| format!("{}", args.markers.display()))?;
     crate::util::announce_work("computing the correspondence", target.num_vertices());
     let t0 = Instant::now();
-    let r = correspond(&source, &target, &markers, &opts).with_context(|| {
-        format!(
-            "correspondence of {} and {}",
-            args.source.display(),
-            args.target.display()
-        )
-    })?;
+    let mut r =
+        correspond(&welded_source, &welded_target, &welded_markers, &opts).with_context(|| {
+            format!(
+                "correspondence of {} and {}",
+                args.source.display(),
+                args.target.display()
+            )
+        })?;
+    let welded_corr = r.correspondence.clone();
+    if !(source_weld.is_identity() && target_weld.is_identity()) {
+        r.correspondence =
+            weld_util::input_correspondence(r.correspondence, &source_weld, &target_weld);
+        // The input's markers as given (a welded vertex's first input vertex may be another).
+        if r.correspondence.markers.len() == markers.pairs.len() && !r.correspondence.identity {
+            r.correspondence.markers = markers.pairs.clone();
+        }
+        r.warped_source = source_weld.scatter(&r.warped_source);
+        r.warped_target = target_weld.scatter(&r.warped_target);
+    }
     let secs = t0.elapsed().as_secs_f64();
     print_summary(&r, secs);
     let hint = if args.confidence.is_some() {
@@ -264,19 +287,33 @@ pub fn run(args: &CorrespondArgs) -> anyhow::Result<()> {
         v["target"] = json!(args.target);
         v["correspondence"] = json!(args.out);
         v["match_confidence"] = confidence_json;
+        v["welded_vertices"] = json!({
+            "source": source_weld.merged(),
+            "target": target_weld.merged(),
+        });
         if let Some(c) = &cycle_files {
             let frames = io::read_shape_set(&c.files)?;
             frames
                 .check_connectivity(&args.source.display().to_string(), &source)
                 .with_context(|| "--cycle-frames vs. --source".to_string())?;
             let t0 = Instant::now();
-            let back = correspond(&target, &source, &markers.reversed(), &opts)
-                .context("correspondence of the way back (cycle consistency)")?;
+            let back = correspond(
+                &welded_target,
+                &welded_source,
+                &welded_markers.reversed(),
+                &opts,
+            )
+            .context("correspondence of the way back (cycle consistency)")?;
+            let frames: Vec<Vec<morphkit::mesh::Point>> = frames
+                .all_positions()
+                .iter()
+                .map(|p| source_weld.gather(p))
+                .collect();
             let cyc = cycle_consistency(
-                &source,
-                frames.all_positions(),
-                &target,
-                &r.correspondence,
+                &welded_source,
+                &frames,
+                &welded_target,
+                &welded_corr,
                 &back.correspondence,
                 &TransferOptions::default(),
             )

@@ -1,6 +1,7 @@
 //! `morphkit flex`: per-triangle flexibility of an animation (Wang & Lee 2008, Sec. 3.1.1,
 //! Eq. 1), as face colours and numbers, on the source or, through a correspondence, the target.
 
+use super::weld_util;
 use crate::outputs::{Kind, Plan};
 use crate::util::progress;
 use anyhow::Context;
@@ -81,25 +82,48 @@ pub fn run(args: &FlexArgs) -> anyhow::Result<()> {
     frames
         .check_connectivity("reference", &reference)
         .with_context(|| format!("frames vs. {}", args.reference.display()))?;
-    let op = GradientOperator::new(&reference);
-    let topo = Topology::new(reference.num_vertices(), &reference.triangles);
-    let mut acc = FlexibilityAccumulator::new(&topo, reference.num_triangles());
+    // Split seams and hard edges are one vertex (mesh::weld), so that neighbouring triangles
+    // across a seam are neighbours; the weld keeps every triangle in its place, so the
+    // per-triangle values need no mapping back.
+    let weld = {
+        let all: Vec<&[morphkit::mesh::Point]> =
+            frames.all_positions().iter().map(|p| &p[..]).collect();
+        weld_util::mesh_weld(&reference, &all)
+    };
+    weld_util::announce(&weld, "the reference");
+    let welded_ref = weld.mesh(&reference);
+    let op = GradientOperator::new(&welded_ref);
+    let topo = Topology::new(welded_ref.num_vertices(), &welded_ref.triangles);
+    let mut acc = FlexibilityAccumulator::new(&topo, welded_ref.num_triangles());
     let pb = progress(frames.len() as u64, "gradients");
     for i in 0..frames.len() {
-        acc.add(&op.gradients_at(i, frames.positions(i))?)?;
+        let p = frames.positions(i);
+        if weld.is_identity() {
+            acc.add(&op.gradients_at(i, p)?)?;
+        } else {
+            acc.add(&op.gradients_at(i, &weld.gather(p))?)?;
+        }
         pb.inc(1);
     }
     pb.finish_and_clear();
     let mut flex = acc.finish();
     let mut mesh = reference;
+    let mut welded_mesh = welded_ref;
+    let mut welded = json!({ "reference": weld.merged() });
     if let Some(t) = &args.target {
         let target = io::read_mesh(t)?;
+        let target_weld = weld_util::mesh_weld(&target, &[]);
+        weld_util::announce(&target_weld, "the target");
+        welded["target"] = json!(target_weld.merged());
+        let welded_target = target_weld.mesh(&target);
         let corr = match (&args.markers, &args.correspondence) {
             (Some(m), _) => {
+                let markers = weld_util::welded_markers(&Markers::read(m)?, &weld, &target_weld)
+                    .with_context(|| format!("{}", m.display()))?;
                 correspond(
-                    &mesh,
-                    &target,
-                    &Markers::read(m)?,
+                    &welded_mesh,
+                    &welded_target,
+                    &markers,
                     &CorrespondenceOptions::default(),
                 )
                 .context("correspondence")?
@@ -110,15 +134,17 @@ pub fn run(args: &FlexArgs) -> anyhow::Result<()> {
                     .with_context(|| format!("{}: cannot read", c.display()))?;
                 let corr =
                     Correspondence::from_json(&text).with_context(|| format!("{}", c.display()))?;
-                corr.check(&mesh, &target)?;
+                let corr = weld_util::welded_correspondence(corr, &weld, &target_weld);
+                corr.check(&welded_mesh, &welded_target)?;
                 corr
             }
             (None, None) => anyhow::bail!("--target needs --markers or --correspondence"),
         };
         flex = flex.map_to_target(&corr)?;
         mesh = target;
+        welded_mesh = welded_target;
     }
-    let topo = Topology::new(mesh.num_vertices(), &mesh.triangles);
+    let topo = Topology::new(welded_mesh.num_vertices(), &welded_mesh.triangles);
     let parts = Partitions::new(&flex, &topo, args.gamma)?;
     let colors = flexibility_colors(&flex.values, args.gamma);
     outputs.colored_ply(&args.out, &mesh, &Colors::PerFace(colors))?;
@@ -141,6 +167,7 @@ pub fn run(args: &FlexArgs) -> anyhow::Result<()> {
             &json!({
                 "reference": args.reference,
                 "target": args.target,
+                "welded_vertices": welded,
                 "frames": frames.len(),
                 "gamma": args.gamma,
                 "max": flex.max(),

@@ -1,7 +1,7 @@
 //! `morphkit info`: counts, size, boundary, components and shared connectivity of meshes.
 
 use crate::util::progress;
-use morphkit::mesh::Topology;
+use morphkit::mesh::{Topology, Weld, WELD_TOLERANCE};
 use morphkit::TriMesh;
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -43,6 +43,9 @@ fn describe(path: &std::path::Path, mesh: &TriMesh, warnings: &[String]) -> Valu
         "components": topo.num_components(),
         "closed": topo.is_closed(),
         "consistently_oriented": topo.is_consistently_oriented(),
+        // Split vertices (seams, hard edges) that solves weld: those within WELD_TOLERANCE of
+        // the diagonal of another vertex of the file.
+        "welded_vertices": Weld::of_mesh(mesh, WELD_TOLERANCE).merged(),
         "warnings": warnings,
     })
 }
@@ -101,6 +104,11 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
             out,
             "  consistently oriented  {}",
             yes_no(&r["consistently_oriented"])
+        )?;
+        writeln!(
+            out,
+            "  welded vertices        {} (split at seams or hard edges: coincident, one vertex for solves)",
+            r["welded_vertices"]
         )?;
         match r["warnings"].as_array() {
             Some(w) if !w.is_empty() => {

@@ -21,3 +21,4 @@ pub mod scene;
 pub mod synth;
 pub mod transfer;
 pub mod volume;
+pub mod weld_util;

@@ -3,6 +3,7 @@
 //! ([`morphkit::transfer::rig`]).
 
 use super::corr_args::CorrespondenceArgs;
+use super::weld_util;
 use crate::outputs::{Kind, Plan};
 use anyhow::{bail, Context};
 use morphkit::io::{self, Format, GltfMorphs};
@@ -164,10 +165,37 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
         "out": args.out,
         "shapes": shapes.len(),
     });
-    let corr = args
-        .corr
-        .obtain(&neutral, &target, &mut report, false)?
-        .correspondence;
+    // Split seams and hard edges are one vertex for the solves (mesh::weld): the source's
+    // where they coincide in the neutral and every shape, the target's where they coincide in
+    // the target; the shapes go back in the target's own layout.
+    let input_target = target;
+    let source_weld = {
+        let all: Vec<&[morphkit::mesh::Point]> =
+            shapes.all_positions().iter().map(|p| &p[..]).collect();
+        weld_util::mesh_weld(&neutral, &all)
+    };
+    let target_weld = weld_util::mesh_weld(&input_target, &[]);
+    weld_util::announce(&source_weld, "the source");
+    weld_util::announce(&target_weld, "the target");
+    report["welded_vertices"] = json!({
+        "source": source_weld.merged(),
+        "target": target_weld.merged(),
+    });
+    let neutral = source_weld.mesh(&neutral);
+    let target = target_weld.mesh(&input_target);
+    let shapes = if source_weld.is_identity() {
+        shapes
+    } else {
+        source_weld.shapes(&shapes)?
+    };
+    let corr = weld_util::obtain_welded(
+        &args.corr,
+        (&neutral, &source_weld),
+        (&target, &target_weld),
+        &mut report,
+        false,
+    )?
+    .correspondence;
     let mut opts = RigOptions::default();
     opts.transfer.combine = args.corr.combine();
     crate::util::announce_work("factorizing the transfer system", target.num_vertices());
@@ -185,9 +213,10 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
             .transfer_shape(i, shapes.positions(i))
             .with_context(|| format!("shape {i} ({})", shapes.name(i)))?;
         let secs = t1.elapsed().as_secs_f64();
+        let x = target_weld.scatter(&x);
         let max_delta = x
             .iter()
-            .zip(&target.positions)
+            .zip(&input_target.positions)
             .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt())
             .fold(0.0, f64::max);
         per_shape.push(json!({
@@ -200,10 +229,10 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
         targets.push(x);
     }
     for (p, x) in shape_paths.iter().zip(&targets) {
-        outputs.mesh(p, &target.with_positions(x.clone()))?;
+        outputs.mesh(p, &input_target.with_positions(x.clone()))?;
     }
     let rig = GltfMorphs {
-        base: target.clone(),
+        base: input_target.clone(),
         target_names: shapes.names().to_vec(),
         targets,
         weight_keys: Vec::new(),
@@ -218,7 +247,7 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
     eprintln!(
         "transferred {} shapes onto {} vertices: factorization {:.3} s, {:.1} ms per shape, {:.2} s in all",
         shapes.len(),
-        target.num_vertices(),
+        input_target.num_vertices(),
         factor_s,
         1e3 * per_shape
             .iter()
@@ -232,7 +261,7 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
         report["factorization_s"] = json!(factor_s);
         report["per_shape"] = json!(per_shape);
         report["total_s"] = json!(total);
-        report["target_vertices"] = json!(target.num_vertices());
+        report["target_vertices"] = json!(input_target.num_vertices());
         outputs.json(r, &report)?;
     }
     outputs.commit()?;

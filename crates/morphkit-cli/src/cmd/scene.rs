@@ -6,8 +6,9 @@ use crate::outputs::{Kind, Plan};
 use crate::util::progress;
 use anyhow::{bail, Context};
 use morphkit::io::{self, FramesOptions};
-use morphkit::mesh::ShapeSet;
-use morphkit::scene::Scene;
+use morphkit::mesh::{ShapeSet, Weld, WELD_TOLERANCE};
+use morphkit::scene::{Pull, Scene};
+use morphkit::springs::FixedVertices;
 use serde_json::json;
 use std::path::Path;
 use std::time::Instant;
@@ -21,7 +22,11 @@ pub fn run(
     threads: usize,
 ) -> anyhow::Result<()> {
     let start = Instant::now();
-    let scene = Scene::load(scene_path)?;
+    let mut scene = Scene::load(scene_path)?;
+    // Split seams and hard edges are one vertex for the solve (mesh::weld), with the pulled
+    // and fixed vertex ids mapped; results go back in the input's layout.
+    let input_base = scene.shapes.base().clone();
+    let weld = weld_scene(&mut scene)?;
     let mut inputs = scene.inputs.clone();
     inputs.push(scene_path.to_path_buf());
     let mut outputs = Plan::new(&inputs)
@@ -72,9 +77,9 @@ pub fn run(
             "frame": k,
             "collision": f.collision,
             "solver": f.solver,
-            "contact_vertices": f.contacts.iter().map(|c| c.vertex).collect::<Vec<_>>(),
+            "contact_vertices": f.contacts.iter().map(|c| weld.representative()[c.vertex as usize]).collect::<Vec<_>>(),
         }));
-        frames.push((format!("frame_{k:04}"), f.positions));
+        frames.push((format!("frame_{k:04}"), weld.scatter(&f.positions)));
     }
     bar.finish_and_clear();
     if !unresolved.is_empty() {
@@ -91,7 +96,7 @@ pub fn run(
             &unconverged[..unconverged.len().min(10)]
         );
     }
-    let out_set = ShapeSet::new(scene.shapes.base().clone(), frames)?;
+    let out_set = ShapeSet::new(input_base.clone(), frames)?;
     let t_write = Instant::now();
     match io::Format::from_path(out) {
         Some(io::Format::Glb | io::Format::Gltf) => {
@@ -146,8 +151,9 @@ pub fn run(
             "scene": scene_path.display().to_string(),
             "inputs": scene.inputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
             "output": out.display().to_string(),
-            "vertices": scene.shapes.num_vertices(),
-            "triangles": scene.shapes.triangles().len(),
+            "vertices": input_base.num_vertices(),
+            "triangles": input_base.num_triangles(),
+            "welded_vertices": weld.merged(),
             "obstacles": scene.obstacles.iter().map(|o| o.name().to_string()).collect::<Vec<_>>(),
             "pulls": scene.pulls.len(),
             "interior": solver.interior_report(),
@@ -168,4 +174,32 @@ pub fn run(
     outputs.commit()?;
     eprintln!("wrote {n} frame(s) to {}", out.display());
     Ok(())
+}
+
+/// Welds the scene's shapes where their vertices coincide in every shape, with its fixed and
+/// pulled vertex ids mapped, and returns the weld.
+fn weld_scene(scene: &mut Scene) -> anyhow::Result<Weld> {
+    let weld = Weld::of_shapes(&scene.shapes, WELD_TOLERANCE);
+    if weld.is_identity() {
+        return Ok(weld);
+    }
+    super::weld_util::announce(&weld, "the base");
+    scene.shapes = weld.shapes(&scene.shapes)?;
+    // Ids out of range stay out of range, for the solver's message.
+    let map = |v: u32| weld.to_welded().get(v as usize).copied().unwrap_or(v);
+    if let FixedVertices::Ids(ids) = &mut scene.blend.fixed {
+        for v in ids.iter_mut() {
+            *v = map(*v);
+        }
+        ids.sort_unstable();
+        ids.dedup();
+    }
+    let pulls = std::mem::take(&mut scene.pulls);
+    for p in pulls {
+        let v = map(p.vertex());
+        scene
+            .pulls
+            .push(Pull::new(v, p.keys().to_vec(), p.kind()).context("pull")?);
+    }
+    Ok(weld)
 }

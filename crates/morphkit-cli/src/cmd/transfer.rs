@@ -2,6 +2,7 @@
 //! (Wang & Lee 2008, Sec. 3.2.3; Sumner & Popović 2004).
 
 use super::corr_args::CorrespondenceArgs;
+use super::weld_util;
 use crate::outputs::{Kind, Plan};
 use crate::util::{check_fps, check_positive, progress};
 use anyhow::Context;
@@ -136,7 +137,7 @@ fn options(args: &TransferArgs) -> anyhow::Result<TransferOptions> {
 
 /// Runs `morphkit transfer`.
 pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
-    let opts = options(args)?;
+    let mut opts = options(args)?;
     let expanded = super::convert::expand(&args.source)?;
     let frame_paths = expanded.files;
     let mut inputs = expanded.protected;
@@ -180,8 +181,38 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         "frames": frames.len(),
         "out": args.out,
     });
+    // Split seams and hard edges are one vertex for the solves (mesh::weld): the source's
+    // where they coincide in the reference and every frame, the target's where they coincide
+    // in the target; results go back in the target's own layout.
+    let input_target = target;
+    let source_weld = {
+        let all: Vec<&[morphkit::mesh::Point]> =
+            frames.all_positions().iter().map(|p| &p[..]).collect();
+        weld_util::mesh_weld(&source_ref, &all)
+    };
+    let target_weld = weld_util::mesh_weld(&input_target, &[]);
+    weld_util::announce(&source_weld, "the source");
+    weld_util::announce(&target_weld, "the target");
+    report["welded_vertices"] = json!({
+        "source": source_weld.merged(),
+        "target": target_weld.merged(),
+    });
+    let source_ref = source_weld.mesh(&source_ref);
+    let target = target_weld.mesh(&input_target);
+    if !source_weld.is_identity() {
+        frames = source_weld.shapes(&frames)?;
+    }
+    if let Some(v) = opts.solver.constraint_vertices.first_mut() {
+        *v = weld_util::welded_id(&target_weld, *v, "--fixed-vertex")?;
+    }
     let mut cycle = None;
-    let obtained = args.corr.obtain(&source_ref, &target, &mut report, true)?;
+    let obtained = weld_util::obtain_welded(
+        &args.corr,
+        (&source_ref, &source_weld),
+        (&target, &target_weld),
+        &mut report,
+        true,
+    )?;
     if args.report.is_some() {
         cycle = obtained.computed_from;
     }
@@ -227,7 +258,7 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         if args.report.is_some() {
             sharp.push(sharp_folds(&target, &topo_t, &x));
         }
-        out.push((format!("frame_{i:04}"), x));
+        out.push((format!("frame_{i:04}"), target_weld.scatter(&x)));
         pb.inc(1);
     }
     pb.finish_and_clear();
@@ -245,7 +276,7 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
             target.num_triangles()
         );
     }
-    let set = ShapeSet::new(target.clone(), out)?;
+    let set = ShapeSet::new(input_target.clone(), out)?;
     let frame_opts = FramesOptions {
         fps: args.fps,
         inputs,
@@ -262,7 +293,13 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         });
         report["target_vertices"] = json!(target.num_vertices());
         report["target_triangles"] = json!(target.num_triangles());
-        report["constraint_vertices"] = json!(tr.solver().constraint_vertices());
+        let constraint: Vec<u32> = tr
+            .solver()
+            .constraint_vertices()
+            .iter()
+            .map(|&v| target_weld.representative()[v as usize])
+            .collect();
+        report["constraint_vertices"] = json!(constraint);
         report["flipped_triangles_per_frame"] = json!(flips);
         report["sharp_folds_per_frame"] = json!(sharp);
         report["fold_guard_unturned_triangles_per_frame"] = json!(guarded);

@@ -42,10 +42,28 @@ impl Weld {
     /// `tolerance × diagonal` of the base ([`WELD_TOLERANCE`] is the default). Groups are
     /// transitive: a chain of close vertices is one vertex.
     pub fn of_shapes(shapes: &ShapeSet, tolerance: f64) -> Self {
-        let n = shapes.num_vertices();
-        let base = shapes.positions(0);
+        let all: Vec<&[Point]> = shapes.all_positions().iter().map(|p| &p[..]).collect();
+        Self::of_positions(&all, tolerance)
+    }
+
+    /// Welds the vertices of one mesh that coincide within `tolerance × diagonal`.
+    pub fn of_mesh(mesh: &TriMesh, tolerance: f64) -> Self {
+        Self::of_positions(&[&mesh.positions[..]], tolerance)
+    }
+
+    /// [`Weld::of_shapes`] on bare position sets of one vertex count (the first is the base
+    /// whose diagonal scales `tolerance`): vertices are welded where they coincide in every set.
+    /// Sets of another vertex count than the first weld nothing.
+    pub fn of_positions(sets: &[&[Point]], tolerance: f64) -> Self {
+        let Some(base) = sets.first().copied() else {
+            return Self::identity(0);
+        };
+        let n = base.len();
+        if sets.iter().any(|s| s.len() != n) {
+            return Self::identity(n);
+        }
         let tol = tolerance * bbox_diagonal(base);
-        if n == 0 || !(tol.is_finite() && tol > 0.0) {
+        if n == 0 || !tol.is_finite() || tol <= 0.0 {
             return Self::identity(n);
         }
         // Cells of side 4 tol: a point has a partner in a neighbouring cell only along the axes
@@ -59,7 +77,7 @@ impl Weld {
             grid.entry(cell(p)).or_default().push(v as u32);
         }
         let close = |a: usize, b: usize| {
-            shapes.all_positions().iter().all(|s| {
+            sets.iter().all(|s| {
                 let (p, q) = (s[a], s[b]);
                 let d2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
                 d2 <= tol * tol
@@ -143,6 +161,28 @@ impl Weld {
     /// The welded vertex of each input vertex.
     pub fn to_welded(&self) -> &[u32] {
         &self.to_welded
+    }
+
+    /// The first input vertex of each welded vertex.
+    pub fn representative(&self) -> &[u32] {
+        &self.representative
+    }
+
+    /// True when every triangle keeps its corners apart after the weld, so that welded
+    /// triangles are the input's, in the same order (per-triangle data needs no mapping).
+    pub fn keeps_triangles(&self, triangles: &[[u32; 3]]) -> bool {
+        self.is_identity() || self.triangles(triangles).len() == triangles.len()
+    }
+
+    /// The welded mesh: [`Weld::gather`]ed positions and [`Weld::triangles`].
+    pub fn mesh(&self, mesh: &TriMesh) -> TriMesh {
+        if self.is_identity() {
+            return mesh.clone();
+        }
+        TriMesh::new(
+            self.gather(&mesh.positions),
+            self.triangles(&mesh.triangles),
+        )
     }
 
     /// `mesh`'s triangles in welded numbering; triangles that lose a corner to the weld (they
@@ -297,5 +337,26 @@ mod tests {
         let w = Weld::of_shapes(&shapes, WELD_TOLERANCE);
         assert!(w.is_identity());
         assert_eq!(w.shapes(&shapes).unwrap().num_vertices(), s.num_vertices());
+    }
+
+    #[test]
+    fn a_single_mesh_welds_its_coincident_vertices_and_keeps_its_triangles() {
+        let m = generate::grid(5, 4, 1.0, 1.0);
+        let s = split(&m, &[6, 7, 8]);
+        let w = Weld::of_mesh(&s, WELD_TOLERANCE);
+        assert_eq!(w.merged(), 3);
+        assert!(w.keeps_triangles(&s.triangles));
+        assert_eq!(w.mesh(&s), m);
+        assert_eq!(w.representative().len(), m.num_vertices());
+        // Sets of other vertex counts weld nothing.
+        let other = vec![[0.0; 3]; 2];
+        assert!(Weld::of_positions(&[&s.positions, &other], WELD_TOLERANCE).is_identity());
+        // A triangle with two coincident corners would be lost.
+        let mut p = m.positions.clone();
+        p[1] = p[0];
+        assert!(
+            !Weld::of_mesh(&TriMesh::new(p, m.triangles.clone()), WELD_TOLERANCE)
+                .keeps_triangles(&m.triangles)
+        );
     }
 }

@@ -1,0 +1,176 @@
+//! Welded solves for the commands beside `blend` (issue 37): the welds of a source and a
+//! target mesh, vertex ids from the command line mapped into them, and correspondences
+//! carried between input and welded numbering (triangles keep their ids: a weld that would
+//! drop a triangle is not applied, see [`mesh_weld`]).
+
+use super::corr_args::{CorrespondenceArgs, Obtained};
+use super::correspond::{confidence_summary, print_summary, summary};
+use anyhow::{bail, Context};
+use morphkit::mesh::{Point, Weld, WELD_TOLERANCE};
+use morphkit::transfer::{
+    correspond, Correspondence, CorrespondenceOptions, Markers, RefineOptions,
+};
+use morphkit::TriMesh;
+use std::time::Instant;
+
+/// The weld of the vertices of `mesh` that coincide in every one of `shapes` (each
+/// `#V` positions; none: in `mesh` alone), or the identity where it would drop a triangle (so
+/// that per-triangle data and correspondences keep their triangle ids) or the counts differ.
+pub fn mesh_weld(mesh: &TriMesh, shapes: &[&[Point]]) -> Weld {
+    let n = mesh.num_vertices();
+    if shapes.iter().any(|s| s.len() != n) {
+        return Weld::identity(n);
+    }
+    let mut sets: Vec<&[Point]> = vec![&mesh.positions];
+    sets.extend(shapes.iter().copied());
+    let w = Weld::of_positions(&sets, WELD_TOLERANCE);
+    if w.keeps_triangles(&mesh.triangles) {
+        w
+    } else {
+        Weld::identity(n)
+    }
+}
+
+/// Says on stderr what `weld` did to the mesh called `what`.
+pub fn announce(weld: &Weld, what: &str) {
+    if !weld.is_identity() {
+        eprintln!(
+            "welded {} split vertices (seams, hard edges) of {what} into the {} they share a position with; results keep its {} vertices",
+            weld.merged(),
+            weld.num_welded(),
+            weld.num_input()
+        );
+    }
+}
+
+/// Input vertex `v` (named `what` in errors) in welded numbering.
+pub fn welded_id(weld: &Weld, v: u32, what: &str) -> anyhow::Result<u32> {
+    match weld.to_welded().get(v as usize) {
+        Some(&w) => Ok(w),
+        None => bail!(
+            "{what} {v} is out of range: the mesh has {} vertices",
+            weld.num_input()
+        ),
+    }
+}
+
+/// Marker pairs in welded numbering (an id out of range stays as it is, for the
+/// correspondence's own message naming the marker).
+pub fn welded_markers(m: &Markers, source: &Weld, target: &Weld) -> anyhow::Result<Markers> {
+    let map = |w: &Weld, v: u32| w.to_welded().get(v as usize).copied().unwrap_or(v);
+    Ok(Markers::new(
+        m.pairs
+            .iter()
+            .map(|&[s, t]| [map(source, s), map(target, t)])
+            .collect(),
+    ))
+}
+
+/// A correspondence written for the input meshes, for the welded ones: vertex counts and
+/// markers mapped (one already welded, or of other counts, is left for `check` to judge).
+pub fn welded_correspondence(
+    mut c: Correspondence,
+    source: &Weld,
+    target: &Weld,
+) -> Correspondence {
+    if (source.is_identity() && target.is_identity())
+        || c.source_vertices != source.num_input()
+        || c.target_vertices != target.num_input()
+        || c.identity
+    {
+        return c;
+    }
+    let map = |w: &Weld, v: &mut u32| {
+        if let Some(&x) = w.to_welded().get(*v as usize) {
+            *v = x;
+        }
+    };
+    c.source_vertices = source.num_welded();
+    c.target_vertices = target.num_welded();
+    for [s, t] in &mut c.markers {
+        map(source, s);
+        map(target, t);
+    }
+    for r in &mut c.marker_residuals {
+        map(source, &mut r.source);
+        map(target, &mut r.target);
+    }
+    c
+}
+
+/// A correspondence of the welded meshes, for the input ones: vertex counts and markers
+/// (each at its welded vertex's first input vertex).
+pub fn input_correspondence(mut c: Correspondence, source: &Weld, target: &Weld) -> Correspondence {
+    if (source.is_identity() && target.is_identity()) || c.identity {
+        return c;
+    }
+    let map = |w: &Weld, v: &mut u32| {
+        if let Some(&x) = w.representative().get(*v as usize) {
+            *v = x;
+        }
+    };
+    c.source_vertices = source.num_input();
+    c.target_vertices = target.num_input();
+    for [s, t] in &mut c.markers {
+        map(source, s);
+        map(target, t);
+    }
+    for r in &mut c.marker_residuals {
+        map(source, &mut r.source);
+        map(target, &mut r.target);
+    }
+    c
+}
+
+/// [`CorrespondenceArgs::obtain`] on welded meshes: markers (input numbering) are mapped
+/// through the welds before the correspondence is computed on the welded meshes, and a
+/// correspondence file (input numbering) is carried to the welded meshes.
+pub fn obtain_welded(
+    args: &CorrespondenceArgs,
+    (source, source_weld): (&TriMesh, &Weld),
+    (target, target_weld): (&TriMesh, &Weld),
+    report: &mut serde_json::Value,
+    confidence: bool,
+) -> anyhow::Result<Obtained> {
+    let Some(m) = &args.markers else {
+        let mut o = args.obtain(source, target, report, confidence)?;
+        o.correspondence = welded_correspondence(o.correspondence, source_weld, target_weld);
+        return Ok(o);
+    };
+    if source_weld.is_identity() && target_weld.is_identity() {
+        return args.obtain(source, target, report, confidence);
+    }
+    args.require()?;
+    let given = Markers::read(m)?;
+    let markers = welded_markers(&given, source_weld, target_weld)
+        .with_context(|| format!("{}", m.display()))?;
+    crate::util::announce_work("computing the correspondence", target.num_vertices());
+    let t0 = Instant::now();
+    let copts = CorrespondenceOptions {
+        refine: args.refine.then(RefineOptions::default),
+        ..Default::default()
+    };
+    let mut r = correspond(source, target, &markers, &copts).context("correspondence")?;
+    let secs = t0.elapsed().as_secs_f64();
+    let welded = r.correspondence.clone();
+    // Reported in input numbering, the markers as given.
+    r.correspondence = input_correspondence(r.correspondence, source_weld, target_weld);
+    r.correspondence.markers = given.pairs;
+    print_summary(&r, secs);
+    report["correspondence"] = summary(&r, secs);
+    r.correspondence = welded;
+    if confidence {
+        let (_, conf) = confidence_summary(
+            source,
+            target,
+            &r.correspondence,
+            args.combine(),
+            "; `morphkit correspond --confidence FILE.ply` shows where",
+        )?;
+        report["correspondence"]["match_confidence"] = conf;
+    }
+    Ok(Obtained {
+        correspondence: r.correspondence,
+        computed_from: Some((markers, copts)),
+    })
+}
