@@ -44,7 +44,10 @@
 //!   target names; [`GltfOptions::extras`] becomes `scenes[0].extras` (the command, the sources,
 //!   the blend weights per frame), where Blender shows it as custom properties.
 
+mod accessor;
+mod anim;
 mod buffers;
+mod extensions;
 mod normals;
 mod precheck;
 mod read;
@@ -53,7 +56,10 @@ mod split;
 mod write;
 mod write_scene;
 
-pub use read::{parse_gltf_morphs, read_gltf_morphs};
+pub use read::{
+    parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs, read_gltf_morphs_with,
+    GltfReadOptions,
+};
 pub use write::{write_gltf_morphs, write_gltf_with, GltfSummary};
 pub use write_scene::{write_gltf_scene, write_gltf_scene_with, GltfRigidMesh};
 
@@ -127,3 +133,6 @@ impl GltfMorphs {
         p
     }
 }
+
+#[cfg(test)]
+mod read_tests;
