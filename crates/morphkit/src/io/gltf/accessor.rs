@@ -36,6 +36,10 @@ impl Data<'_> {
     }
 }
 
+/// The most components an accessor without a buffer view may have (it costs memory without
+/// costing file size): 2²⁶, 512 MiB of `f64`.
+const MAX_ZERO_ELEMENTS: usize = 1 << 26;
+
 /// Number of components of an element.
 pub(crate) fn components(d: Dimensions) -> usize {
     d.multiplicity()
@@ -149,11 +153,17 @@ pub(crate) fn read(acc: &Accessor, data: &Data) -> Result<Vec<f64>, String> {
             .map_err(at)?;
         }
         None => {
-            if acc.sparse().is_none() {
-                return Err(at("has neither a buffer view nor sparse values".into()));
-            }
-            // Bounded by the count the document declares; sparse data fills it in.
-            out = vec![0.0; count.checked_mul(comps).ok_or_else(|| at("too large".into()))?];
+            // No buffer view: all zeros (§5.1.1), with sparse values if any. The count is the
+            // document's word, so bound it before allocating.
+            let n = count
+                .checked_mul(comps)
+                .filter(|&n| n <= MAX_ZERO_ELEMENTS)
+                .ok_or_else(|| {
+                    at(format!(
+                        "{count} elements without a buffer view; at most {MAX_ZERO_ELEMENTS} components are read"
+                    ))
+                })?;
+            out = vec![0.0; n];
         }
     }
     if let Some(sp) = acc.sparse() {

@@ -162,7 +162,9 @@ pub fn parse_gltf_morphs_with(
         (Cow::Borrowed(super::super::strip_bom(&bytes)), None)
     };
     let stripped = extensions::strip_required(path, &json)?;
-    let gltf = ::gltf::Gltf::from_slice(stripped.as_deref().unwrap_or(&json)).map_err(gerr)?;
+    let gltf = ::gltf::Gltf::from_slice_without_validation(stripped.as_deref().unwrap_or(&json))
+        .map_err(gerr)?;
+    validate(&gltf.document).map_err(gerr)?;
     drop((json, stripped));
     // The file's bytes are no longer needed: the BIN chunk was copied into the blob.
     drop(bytes);
@@ -213,6 +215,29 @@ pub fn parse_gltf_morphs_with(
         targets,
         weight_keys,
     })
+}
+
+/// The `gltf` crate's validation, except that an accessor may have neither a buffer view nor
+/// sparse values: glTF 2.0 §5.1.1 says it is then all zeros (gltf-transform writes such
+/// accessors for all-zero morph-target normals).
+fn validate(doc: &::gltf::Document) -> Result<(), ::gltf::Error> {
+    use ::gltf::json::validation::{Error, Validate};
+    let root = doc.as_json();
+    let mut errors = Vec::new();
+    root.validate(root, ::gltf::json::Path::new, &mut |path, error| {
+        let p = path();
+        let zeros = matches!(error, Error::Missing)
+            && p.as_str().starts_with("accessors[")
+            && p.as_str().ends_with("].bufferView");
+        if !zeros {
+            errors.push((p, error));
+        }
+    });
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(::gltf::Error::Validation(errors))
+    }
 }
 
 /// How errors and listings name a mesh: `mesh 2 'Face'`.

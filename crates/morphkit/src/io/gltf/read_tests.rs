@@ -144,9 +144,12 @@ fn sparse_target_accessors_with_and_without_a_view() {
     let t1 = d.accessor(json!({"bufferView": ones_view, "componentType": F32, "count": 6,
         "type": "VEC3", "sparse": {"count": 2,
         "indices": {"bufferView": idx, "componentType": U16}, "values": {"bufferView": val}}}));
-    let m = parse(d.json(json!({"meshes": [{"primitives": [
-        {"attributes": {"POSITION": p}, "targets": [{"POSITION": t0}, {"POSITION": t1}]}]}]})))
+    // Target 2: neither a view nor sparse values: all zeros (gltf-transform writes these).
+    let t2 = d.accessor(json!({"componentType": F32, "count": 6, "type": "VEC3"}));
+    let m = parse(d.json(json!({"meshes": [{"primitives": [{"attributes": {"POSITION": p},
+        "targets": [{"POSITION": t0}, {"POSITION": t1}, {"POSITION": t2}]}]}]})))
     .unwrap();
+    assert_eq!(m.targets[2], m.base.positions);
     assert_eq!(m.targets[0][2], [0.0, 1.0, 2.0]);
     assert_eq!(m.targets[0][5], [0.0, 1.0, -1.0]);
     assert_eq!(m.targets[0][1], [1.0, 0.0, 0.0]);
