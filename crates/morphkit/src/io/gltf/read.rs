@@ -342,7 +342,7 @@ fn read_mesh(
                     )
                 {
                     return Err(at(format!(
-                        "index accessor {} is {:?} {:?}, expected SCALAR unsigned integers",
+                        "index accessor {} is {:?} {:?}, expected an unsigned integer type (SCALAR)",
                         acc.index(),
                         acc.data_type(),
                         acc.dimensions()
