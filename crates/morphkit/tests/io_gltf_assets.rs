@@ -14,7 +14,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn tmp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("morphkit-gltf-assets-{name}-{}", std::process::id()));
+    let d = std::env::temp_dir().join(format!(
+        "morphkit-gltf-assets-{name}-{}",
+        std::process::id()
+    ));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
@@ -85,12 +88,19 @@ fn mul(a: &Mat, b: &Mat) -> Mat {
 /// A node's local matrix (row-major, column vectors) from `matrix` or TRS.
 fn local(node: &serde_json::Value) -> Mat {
     let f = |k: &str, d: &[f64]| -> Vec<f64> {
-        node.get(k).and_then(|v| v.as_array()).map_or(d.to_vec(), |a| {
-            a.iter().map(|x| x.as_f64().unwrap()).collect()
-        })
+        node.get(k)
+            .and_then(|v| v.as_array())
+            .map_or(d.to_vec(), |a| {
+                a.iter().map(|x| x.as_f64().unwrap()).collect()
+            })
     };
     if let Some(m) = node.get("matrix") {
-        let m: Vec<f64> = m.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+        let m: Vec<f64> = m
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
         let mut r = [[0.0; 4]; 4];
         for c in 0..4 {
             for row in 0..4 {
@@ -104,11 +114,28 @@ fn local(node: &serde_json::Value) -> Mat {
     let s = f("scale", &[1.0; 3]);
     let (x, y, z, w) = (q[0], q[1], q[2], q[3]);
     let r = [
-        [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)],
-        [2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)],
-        [2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)],
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - z * w),
+            2.0 * (x * z + y * w),
+        ],
+        [
+            2.0 * (x * y + z * w),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - x * w),
+        ],
+        [
+            2.0 * (x * z - y * w),
+            2.0 * (y * z + x * w),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
     ];
-    let mut m = [[0.0, 0.0, 0.0, 0.0], [0.0; 4], [0.0; 4], [0.0, 0.0, 0.0, 1.0]];
+    let mut m = [
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0; 4],
+        [0.0; 4],
+        [0.0, 0.0, 0.0, 1.0],
+    ];
     for i in 0..3 {
         for j in 0..3 {
             m[i][j] = r[i][j] * s[j];
@@ -169,8 +196,16 @@ fn check_same(file: &Path, got: &GltfMorphs, want: &GltfMorphs, tol: f64, weight
     let place = |p: &[Point]| p.iter().map(|&q| apply(&m, q)).collect::<Vec<_>>();
     let base = place(&got.base.positions);
     let targets: Vec<Vec<Point>> = got.targets.iter().map(|t| place(t)).collect();
-    assert_eq!(base.len(), want.base.positions.len(), "{name}: vertex count");
-    assert_eq!(got.base.triangles.len(), want.base.triangles.len(), "{name}: triangles");
+    assert_eq!(
+        base.len(),
+        want.base.positions.len(),
+        "{name}: vertex count"
+    );
+    assert_eq!(
+        got.base.triangles.len(),
+        want.base.triangles.len(),
+        "{name}: triangles"
+    );
     assert_eq!(got.target_names, want.target_names, "{name}: target names");
     // Exporters reorder vertices: match each one to the nearest original.
     let mut map = vec![usize::MAX; base.len()];
@@ -194,7 +229,11 @@ fn check_same(file: &Path, got: &GltfMorphs, want: &GltfMorphs, tol: f64, weight
     let mut seen = map.clone();
     seen.sort_unstable();
     seen.dedup();
-    assert_eq!(seen.len(), map.len(), "{name}: two vertices match the same original");
+    assert_eq!(
+        seen.len(),
+        map.len(),
+        "{name}: two vertices match the same original"
+    );
     let canon = |t: [u32; 3]| {
         let k = (0..3).min_by_key(|&k| t[k]).unwrap();
         [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
@@ -209,11 +248,18 @@ fn check_same(file: &Path, got: &GltfMorphs, want: &GltfMorphs, tol: f64, weight
     want_tris.sort_unstable();
     got_tris.sort_unstable();
     assert_eq!(got_tris, want_tris, "{name}: triangles");
-    assert_eq!(got.weight_keys.len(), want.weight_keys.len(), "{name}: keys");
+    assert_eq!(
+        got.weight_keys.len(),
+        want.weight_keys.len(),
+        "{name}: keys"
+    );
     for ((t, w), (t0, w0)) in got.weight_keys.iter().zip(&want.weight_keys) {
         assert!((t - t0).abs() < 1e-4, "{name}: key time {t} vs {t0}");
         for (a, b) in w.iter().zip(w0) {
-            assert!((a - b).abs() <= weight_tol, "{name}: weight {a} vs {b} at {t0}");
+            assert!(
+                (a - b).abs() <= weight_tol,
+                "{name}: weight {a} vs {b} at {t0}"
+            );
         }
     }
 }
@@ -245,7 +291,12 @@ fn exporter_variants_read_back() {
         ("meshopt.glb", 1e-3, w8, Some("meshopt_compression")),
         ("meshopt-noq.glb", 1e-6, w8, Some("meshopt_compression")),
         ("sparse.glb", 1e-7, 0.0, None),
-        ("transform-meshopt.glb", 1e-3, w8, Some("meshopt_compression")),
+        (
+            "transform-meshopt.glb",
+            1e-3,
+            w8,
+            Some("meshopt_compression"),
+        ),
     ];
     for (file, tol, wtol, ext) in cases {
         let p = out.join(file);
@@ -256,8 +307,11 @@ fn exporter_variants_read_back() {
         }
         check_same(&p, &got, &want, tol, wtol);
     }
-    let sparse = String::from_utf8_lossy(&std::fs::read(out.join("sparse.glb")).unwrap())
-        .into_owned();
-    assert!(sparse.contains("\"sparse\""), "sparse.glb has no sparse accessor");
+    let sparse =
+        String::from_utf8_lossy(&std::fs::read(out.join("sparse.glb")).unwrap()).into_owned();
+    assert!(
+        sparse.contains("\"sparse\""),
+        "sparse.glb has no sparse accessor"
+    );
     let _ = std::fs::remove_dir_all(&d);
 }

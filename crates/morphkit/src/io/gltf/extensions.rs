@@ -66,7 +66,9 @@ pub(crate) fn strip_required(path: &Path, json: &[u8]) -> Result<Option<Vec<u8>>
 }
 
 /// The meshopt extension object of a buffer or buffer view.
-fn meshopt_ext<'a>(ext: Option<&'a serde_json::Map<String, serde_json::Value>>) -> Option<&'a serde_json::Value> {
+fn meshopt_ext(
+    ext: Option<&serde_json::Map<String, serde_json::Value>>,
+) -> Option<&serde_json::Value> {
     let ext = ext?;
     MESHOPT.iter().find_map(|n| ext.get(*n))
 }
@@ -130,7 +132,7 @@ pub(crate) fn decode_views(
             })?;
         let mut dst = vec![0u8; size];
         let code = match mode {
-            "ATTRIBUTES" if stride % 4 == 0 => unsafe {
+            "ATTRIBUTES" if stride.is_multiple_of(4) => unsafe {
                 // SAFETY: `dst` holds count × stride bytes; the decoder validates `src`.
                 meshopt::ffi::meshopt_decodeVertexBuffer(
                     dst.as_mut_ptr().cast(),
@@ -143,7 +145,7 @@ pub(crate) fn decode_views(
             "TRIANGLES" | "INDICES" if stride == 2 || stride == 4 => unsafe {
                 // SAFETY: as above; the index size is 2 or 4.
                 if mode == "TRIANGLES" {
-                    if count % 3 != 0 {
+                    if !count.is_multiple_of(3) {
                         return Err(at(format!("TRIANGLES with {count} indices")));
                     }
                     meshopt::ffi::meshopt_decodeIndexBuffer(
@@ -170,7 +172,9 @@ pub(crate) fn decode_views(
             }
         };
         if code != 0 {
-            return Err(at(format!("the compressed data is invalid (decoder code {code})")));
+            return Err(at(format!(
+                "the compressed data is invalid (decoder code {code})"
+            )));
         }
         if mode == "ATTRIBUTES" {
             apply_filter(filter, &mut dst, count, stride).map_err(at)?;
@@ -188,11 +192,13 @@ fn apply_filter(filter: &str, dst: &mut [u8], count: usize, stride: usize) -> Re
         "NONE" => return Ok(()),
         "OCTAHEDRAL" | "COLOR" => stride == 4 || stride == 8,
         "QUATERNION" => stride == 8,
-        "EXPONENTIAL" => stride % 4 == 0,
+        "EXPONENTIAL" => stride.is_multiple_of(4),
         _ => return Err(format!("unknown filter {filter}")),
     };
     if !ok {
-        return Err(format!("filter {filter} with byteStride {stride} is not valid"));
+        return Err(format!(
+            "filter {filter} with byteStride {stride} is not valid"
+        ));
     }
     let p = dst.as_mut_ptr().cast();
     // SAFETY: `dst` holds count × stride bytes and the stride suits the filter (checked above).

@@ -47,8 +47,10 @@ impl Doc {
                 hi[k] = hi[k].max(q[k]);
             }
         }
-        self.accessor(json!({"bufferView": v, "componentType": F32, "count": p.len(),
-            "type": "VEC3", "min": lo, "max": hi}))
+        self.accessor(
+            json!({"bufferView": v, "componentType": F32, "count": p.len(),
+            "type": "VEC3", "min": lo, "max": hi}),
+        )
     }
     fn scalars(&mut self, x: &[f32]) -> usize {
         let bytes: Vec<u8> = x.iter().flat_map(|x| x.to_le_bytes()).collect();
@@ -57,8 +59,10 @@ impl Doc {
             x.iter().copied().fold(f32::MAX, f32::min),
             x.iter().copied().fold(f32::MIN, f32::max),
         );
-        self.accessor(json!({"bufferView": v, "componentType": F32, "count": x.len(),
-            "type": "SCALAR", "min": [lo], "max": [hi]}))
+        self.accessor(
+            json!({"bufferView": v, "componentType": F32, "count": x.len(),
+            "type": "SCALAR", "min": [lo], "max": [hi]}),
+        )
     }
     /// The glTF JSON with `meshes` (and the rest of `extra` merged in).
     fn json(&self, extra: Value) -> Vec<u8> {
@@ -128,7 +132,13 @@ fn non_indexed_primitive_is_consecutive_triples() {
 fn sparse_target_accessors_with_and_without_a_view() {
     let mut d = Doc::default();
     let p = d.vec3(&TRI2);
-    let idx = d.view(&[2u16, 5].iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<_>>(), None);
+    let idx = d.view(
+        &[2u16, 5]
+            .iter()
+            .flat_map(|i| i.to_le_bytes())
+            .collect::<Vec<_>>(),
+        None,
+    );
     let vals: Vec<u8> = [0.0f32, 0.0, 2.0, 0.0, 0.0, -1.0]
         .iter()
         .flat_map(|x| x.to_le_bytes())
@@ -141,13 +151,17 @@ fn sparse_target_accessors_with_and_without_a_view() {
     // Target 1: a dense view of ones, the same two sparse values substituted.
     let ones = d.vec3(&[[1.0; 3]; 6]);
     let ones_view = d.accessors[ones]["bufferView"].clone();
-    let t1 = d.accessor(json!({"bufferView": ones_view, "componentType": F32, "count": 6,
+    let t1 = d.accessor(
+        json!({"bufferView": ones_view, "componentType": F32, "count": 6,
         "type": "VEC3", "sparse": {"count": 2,
-        "indices": {"bufferView": idx, "componentType": U16}, "values": {"bufferView": val}}}));
+        "indices": {"bufferView": idx, "componentType": U16}, "values": {"bufferView": val}}}),
+    );
     // Target 2: neither a view nor sparse values: all zeros (gltf-transform writes these).
     let t2 = d.accessor(json!({"componentType": F32, "count": 6, "type": "VEC3"}));
-    let m = parse(d.json(json!({"meshes": [{"primitives": [{"attributes": {"POSITION": p},
-        "targets": [{"POSITION": t0}, {"POSITION": t1}, {"POSITION": t2}]}]}]})))
+    let m = parse(d.json(
+        json!({"meshes": [{"primitives": [{"attributes": {"POSITION": p},
+        "targets": [{"POSITION": t0}, {"POSITION": t1}, {"POSITION": t2}]}]}]}),
+    ))
     .unwrap();
     assert_eq!(m.targets[2], m.base.positions);
     assert_eq!(m.targets[0][2], [0.0, 1.0, 2.0]);
@@ -190,12 +204,16 @@ fn quantized_positions_and_deltas() {
         })
         .collect();
     let v = d.view(&bytes, Some(8));
-    let p = d.accessor(json!({"bufferView": v, "componentType": I16, "normalized": true,
-        "count": 3, "type": "VEC3", "min": [0, 0, -32768], "max": [32767, 16384, 0]}));
+    let p = d.accessor(
+        json!({"bufferView": v, "componentType": I16, "normalized": true,
+        "count": 3, "type": "VEC3", "min": [0, 0, -32768], "max": [32767, 16384, 0]}),
+    );
     // Deltas: normalized i8 (KHR_mesh_quantization), padded to 4 bytes.
     let tv = d.view(&[0, 0, 127, 0, 0, 0, 0, 0, 0x81, 0, 0, 0], Some(4));
-    let t = d.accessor(json!({"bufferView": tv, "componentType": I8, "normalized": true,
-        "count": 3, "type": "VEC3"}));
+    let t = d.accessor(
+        json!({"bufferView": tv, "componentType": I8, "normalized": true,
+        "count": 3, "type": "VEC3"}),
+    );
     let m = parse(d.json(json!({
         "extensionsUsed": ["KHR_mesh_quantization"],
         "extensionsRequired": ["KHR_mesh_quantization"],
@@ -249,7 +267,10 @@ fn several_morph_meshes_are_chosen_by_name() {
     assert_eq!(pick("Face").unwrap().targets[0][0], [0.0, 0.0, 1.0]);
     assert!(pick("Plain").unwrap().targets.is_empty());
     let e = pick("Nose").unwrap_err();
-    assert!(e.contains("no mesh named 'Nose'") && e.contains("mesh 2 'Teeth'"), "{e}");
+    assert!(
+        e.contains("no mesh named 'Nose'") && e.contains("mesh 2 'Teeth'"),
+        "{e}"
+    );
     // One morph mesh among plain ones is taken without asking.
     let mut d = Doc::default();
     let p = d.vec3(&TRI2);
@@ -270,12 +291,18 @@ fn meshopt_compressed_views_are_decoded() {
     let ienc = meshopt::encode_index_buffer(&idx, 6).unwrap();
     let ev = d.view(&enc, None);
     let iv = d.view(&ienc, None);
-    let (eo, io) = (d.views[ev]["byteOffset"].clone(), d.views[iv]["byteOffset"].clone());
+    let (eo, io) = (
+        d.views[ev]["byteOffset"].clone(),
+        d.views[iv]["byteOffset"].clone(),
+    );
     // The views refer to buffer 1 (the fallback, no data); their compressed bytes are in 0.
-    d.views.push(json!({"buffer": 1, "byteLength": 72, "byteStride": 12, "extensions": {
+    d.views.push(
+        json!({"buffer": 1, "byteLength": 72, "byteStride": 12, "extensions": {
         "EXT_meshopt_compression": {"buffer": 0, "byteOffset": eo, "byteLength": enc.len(),
-            "byteStride": 12, "count": 6, "mode": "ATTRIBUTES"}}}));
-    d.views.push(json!({"buffer": 1, "byteLength": 24, "extensions": {
+            "byteStride": 12, "count": 6, "mode": "ATTRIBUTES"}}}),
+    );
+    d.views
+        .push(json!({"buffer": 1, "byteLength": 24, "extensions": {
         "EXT_meshopt_compression": {"buffer": 0, "byteOffset": io, "byteLength": ienc.len(),
             "byteStride": 4, "count": 6, "mode": "TRIANGLES"}}}));
     let p = d.accessor(json!({"bufferView": 2, "componentType": F32, "count": 6,
@@ -287,7 +314,10 @@ fn meshopt_compressed_views_are_decoded() {
         "extensionsRequired": ["EXT_meshopt_compression"],
         "meshes": [{"primitives": [{"attributes": {"POSITION": p}, "indices": i}]}]})))
     .unwrap();
-    json["buffers"].as_array_mut().unwrap().push(json!({"byteLength": 96,
+    json["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"byteLength": 96,
         "extensions": {"EXT_meshopt_compression": {"fallback": true}}}));
     let m = parse(serde_json::to_vec(&json).unwrap()).unwrap();
     let want: Vec<[f64; 3]> = TRI2.iter().map(|q| q.map(f64::from)).collect();
