@@ -8,7 +8,9 @@
 //!   `OCTAHEDRAL`, `QUATERNION`, `EXPONENTIAL`, `COLOR`) of a range of another buffer; a
 //!   buffer marked `fallback` needs no data.
 //!
-//! Any other extension in `extensionsRequired` (for example `KHR_draco_mesh_compression`) is an
+//! Required extensions that do not change the geometry (materials, textures, lights,
+//! instancing; [`IGNORED`]) are accepted and what they describe is not read. Any other
+//! extension in `extensionsRequired` (for example `KHR_draco_mesh_compression`) is an
 //! error naming it. The `gltf` crate refuses every required extension it does not implement, so
 //! the supported ones are removed from `extensionsRequired` before it sees the document.
 
@@ -21,6 +23,28 @@ pub(crate) const SUPPORTED: &[&str] = &[
     "EXT_meshopt_compression",
     "KHR_meshopt_compression",
 ];
+
+/// Required extensions that do not change geometry, morph targets or animations (materials,
+/// textures, lights, instancing): the reader ignores what they describe. Names ending in `_`
+/// are prefixes.
+pub(crate) const IGNORED: &[&str] = &[
+    "KHR_materials_",
+    "KHR_texture_transform",
+    "KHR_texture_basisu",
+    "EXT_texture_webp",
+    "EXT_texture_avif",
+    "MSFT_texture_dds",
+    "KHR_lights_punctual",
+    "EXT_mesh_gpu_instancing",
+];
+
+/// Whether the reader accepts the required extension `name`.
+fn accepted(name: &str) -> bool {
+    SUPPORTED.contains(&name)
+        || IGNORED
+            .iter()
+            .any(|i| name == *i || (i.ends_with('_') && name.starts_with(i)))
+}
 
 /// The names of the meshopt compression extension.
 const MESHOPT: &[&str] = &["EXT_meshopt_compression", "KHR_meshopt_compression"];
@@ -45,17 +69,16 @@ pub(crate) fn strip_required(path: &Path, json: &[u8]) -> Result<Option<Vec<u8>>
     else {
         return Ok(None);
     };
-    if let Some(bad) = req
-        .iter()
-        .find(|e| !e.as_str().is_some_and(|s| SUPPORTED.contains(&s)))
-    {
+    if let Some(bad) = req.iter().find(|e| !e.as_str().is_some_and(accepted)) {
         let name = bad.as_str().map_or_else(|| bad.to_string(), str::to_string);
         return Err(IoError::content(
             path,
             format!(
                 "the file requires the glTF extension {name}, which morphkit does not support \
-                 (supported: {}); re-export it without {name}",
-                SUPPORTED.join(", ")
+                 (supported: {}; ignored, as they do not change the geometry: {}*); re-export it \
+                 without {name}",
+                SUPPORTED.join(", "),
+                IGNORED.join("*, ")
             ),
         ));
     }

@@ -218,8 +218,9 @@ pub fn parse_gltf_morphs_with(
 }
 
 /// The `gltf` crate's validation, except that an accessor may have neither a buffer view nor
-/// sparse values: glTF 2.0 §5.1.1 says it is then all zeros (gltf-transform writes such
-/// accessors for all-zero morph-target normals).
+/// sparse values (glTF 2.0 §5.1.1: it is then all zeros; gltf-transform writes such accessors
+/// for all-zero morph-target normals), and that textures, images and materials, which are not
+/// read, are not checked.
 fn validate(doc: &::gltf::Document) -> Result<(), ::gltf::Error> {
     use ::gltf::json::validation::{Error, Validate};
     let root = doc.as_json();
@@ -229,7 +230,11 @@ fn validate(doc: &::gltf::Document) -> Result<(), ::gltf::Error> {
         let zeros = matches!(error, Error::Missing)
             && p.as_str().starts_with("accessors[")
             && p.as_str().ends_with("].bufferView");
-        if !zeros {
+        // Never read; a texture of KHR_texture_basisu or EXT_texture_webp has no `source`.
+        let unread = ["textures[", "images[", "materials["]
+            .iter()
+            .any(|k| p.as_str().starts_with(k));
+        if !zeros && !unread {
             errors.push((p, error));
         }
     });

@@ -239,6 +239,15 @@ fn unsupported_required_extension_is_named() {
         e.contains("requires the glTF extension KHR_draco_mesh_compression"),
         "{e}"
     );
+    // Extensions that do not change the geometry are accepted, even with a texture the gltf
+    // crate would refuse (no `source`, as with KHR_texture_basisu).
+    let m = parse(d.json(json!({
+        "extensionsUsed": ["KHR_texture_basisu", "KHR_materials_unlit"],
+        "extensionsRequired": ["KHR_texture_basisu", "KHR_materials_unlit"],
+        "textures": [{"extensions": {"KHR_texture_basisu": {"source": 0}}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": p}}]}]})))
+    .unwrap();
+    assert_eq!(m.base.triangles.len(), 2);
 }
 
 #[test]
