@@ -46,6 +46,10 @@ fn accepted(name: &str) -> bool {
             .any(|i| name == *i || (i.ends_with('_') && name.starts_with(i)))
 }
 
+/// The largest ratio of decoded to compressed bytes accepted for a meshopt view (the vertex
+/// codec stores at least 2 bits per 16 bytes, a ratio of 64).
+const MAX_RATIO: usize = 256;
+
 /// The names of the meshopt compression extension.
 const MESHOPT: &[&str] = &["EXT_meshopt_compression", "KHR_meshopt_compression"];
 
@@ -153,6 +157,14 @@ pub(crate) fn decode_views(
                     view.length()
                 ))
             })?;
+        // The document declares the decoded size; meshopt's codecs shrink data by far less
+        // than MAX_RATIO, so a larger claim is refused before allocating.
+        if size > src.len().saturating_mul(MAX_RATIO).max(1 << 16) {
+            return Err(at(format!(
+                "{size} decoded bytes from {} compressed ones is more than meshopt can encode",
+                src.len()
+            )));
+        }
         let mut dst = vec![0u8; size];
         let code = match mode {
             "ATTRIBUTES" if stride.is_multiple_of(4) => unsafe {
