@@ -94,6 +94,9 @@ fn read_dense(
     normalized: bool,
     out: &mut Vec<f64>,
 ) -> Result<(), String> {
+    if count == 0 {
+        return Ok(());
+    }
     let elem = comps * size(t);
     let stride = stride.unwrap_or(elem);
     if stride < elem {

@@ -164,6 +164,17 @@ fn sparse_target_accessors_with_and_without_a_view() {
     ))
     .unwrap();
     assert_eq!(m.targets[2], m.base.positions);
+    // An empty sparse substitution (count 0, invalid but harmless) changes nothing.
+    let t3 = d.accessor(json!({"componentType": F32, "count": 6, "type": "VEC3",
+        "sparse": {"count": 0, "indices": {"bufferView": idx, "componentType": U16},
+                   "values": {"bufferView": val}}}));
+    let m3 = parse(d.json(
+        json!({"meshes": [{"primitives": [{"attributes": {"POSITION": p},
+        "targets": [{"POSITION": t3}]}]}]}),
+    ));
+    if let Ok(m3) = m3 {
+        assert_eq!(m3.targets[0], m3.base.positions);
+    }
     assert_eq!(m.targets[0][2], [0.0, 1.0, 2.0]);
     assert_eq!(m.targets[0][5], [0.0, 1.0, -1.0]);
     assert_eq!(m.targets[0][1], [1.0, 0.0, 0.0]);
