@@ -13,16 +13,24 @@ use std::path::{Component, Path, PathBuf};
 
 /// The data of every buffer of `doc`, in index order, each at least `byteLength` bytes long.
 ///
-/// `path` is the glTF file (errors name it and the buffer); `blob` is the GLB `BIN` chunk.
+/// `path` is the glTF file (errors name it and the buffer); `blob` is the GLB `BIN` chunk;
+/// buffers marked in `fallback` (meshopt compression) are left empty.
 pub(crate) fn load_buffers(
     path: &Path,
     doc: &::gltf::Document,
     mut blob: Option<Vec<u8>>,
+    fallback: &[bool],
 ) -> Result<Vec<Vec<u8>>, IoError> {
     let mut out = Vec::with_capacity(doc.buffers().len());
     for buffer in doc.buffers() {
         let i = buffer.index();
         let len = buffer.length();
+        // A meshopt fallback buffer is never read (its views are decoded from another buffer);
+        // it usually has no data at all.
+        if fallback.get(i).copied().unwrap_or(false) {
+            out.push(Vec::new());
+            continue;
+        }
         let at = |m: String| IoError::content(path, format!("buffer {i}: {m}"));
         let data = match buffer.source() {
             ::gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {

@@ -1,14 +1,26 @@
 //! glTF 2.0 (`.gltf` JSON and `.glb` binary) meshes with morph targets and morph-weight
 //! animations.
 //!
-//! Reading ([`read_gltf_morphs`]) uses the `gltf` crate and takes the **first mesh** of the
-//! file: its triangle primitives are merged into one [`TriMesh`] (indices offset by the
-//! vertices of the primitives before), node transforms are ignored (positions are the mesh's
-//! own), the morph targets' `POSITION` displacements become absolute target positions, names
-//! come from `mesh.extras.targetNames`, and the first animation channel that drives the
-//! `weights` of a node using that mesh gives the weight keys. A long animation that
+//! Reading ([`read_gltf_morphs`], or [`read_gltf_morphs_with`] to choose a mesh by name with
+//! [`GltfReadOptions::mesh`]) takes **the mesh with morph targets**: when several meshes have
+//! morph targets the caller must choose one (the error lists their names); when none has, the
+//! first mesh. Its triangle primitives, indexed or not (consecutive vertex triples), are merged
+//! into one [`TriMesh`] (indices offset by the vertices of the primitives before). Node
+//! transforms are not applied: positions are in the mesh's own space (a quantized file keeps
+//! its dequantization on the node, so its positions are then in integer units). The morph
+//! targets' `POSITION` displacements become absolute target positions, names come from
+//! `mesh.extras.targetNames`, and the first animation channel that drives the `weights` of a
+//! node using that mesh gives the weight keys (`STEP`, `LINEAR`, or the values of
+//! `CUBICSPLINE` keys). Accessors are decoded by morphkit (every component type, `normalized`,
+//! `byteStride`, sparse accessors, accessors without a buffer view), so files written by
+//! exporters' tools are read: `KHR_mesh_quantization` (gltfpack's default),
+//! `EXT_meshopt_compression` / `KHR_meshopt_compression` (`gltfpack -c`, `gltf-transform
+//! meshopt`), sparse storage (`gltf-transform sparse`). Required extensions that change only
+//! materials, textures, lights or instancing are ignored; any other required extension (for
+//! example `KHR_draco_mesh_compression`) is an error naming it. A long animation that
 //! [`write_gltf_with`] split into several meshes (their `extras.morphkitTargets`) is read back
-//! as one rig: every target once, the windows' keys merged in time order.
+//! as one rig: every target once, the windows' keys merged in time order. See
+//! `docs/gltf-input.md`.
 //!
 //! Writing ([`write_gltf_with`], or [`write_gltf_morphs`] with the default [`GltfOptions`])
 //! produces one buffer (the GLB `BIN` chunk, or a base64 data URI in a `.gltf`, so the output
@@ -44,7 +56,10 @@
 //!   target names; [`GltfOptions::extras`] becomes `scenes[0].extras` (the command, the sources,
 //!   the blend weights per frame), where Blender shows it as custom properties.
 
+mod accessor;
+mod anim;
 mod buffers;
+mod extensions;
 mod normals;
 mod precheck;
 mod read;
@@ -53,7 +68,10 @@ mod split;
 mod write;
 mod write_scene;
 
-pub use read::{parse_gltf_morphs, read_gltf_morphs};
+pub use read::{
+    parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs, read_gltf_morphs_with,
+    GltfReadOptions,
+};
 pub use write::{write_gltf_morphs, write_gltf_with, GltfSummary};
 pub use write_scene::{write_gltf_scene, write_gltf_scene_with, GltfRigidMesh};
 
@@ -127,3 +145,6 @@ impl GltfMorphs {
         p
     }
 }
+
+#[cfg(test)]
+mod read_tests;

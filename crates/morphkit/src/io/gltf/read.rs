@@ -1,16 +1,16 @@
 //! Reading glTF/GLB into [`GltfMorphs`].
 
+use super::accessor::{self, Data};
+use super::anim::{target_names, weight_keys};
 use super::buffers::load_buffers;
-use super::GltfMorphs;
+use super::{extensions, GltfMorphs};
 use crate::io::Format;
 use crate::io::{source::read_file, IoError};
 use crate::mesh::{Point, Polygons, TriMesh};
 use ::gltf::accessor::{DataType, Dimensions};
-use ::gltf::animation::util::ReadOutputs;
-use ::gltf::animation::{Interpolation, Property};
-use ::gltf::json::validation::Checked;
 use ::gltf::mesh::Mode;
 use ::gltf::Semantic;
+use std::borrow::Cow;
 use std::path::Path;
 
 fn u32_at(b: &[u8], o: usize) -> u32 {
@@ -82,23 +82,51 @@ fn check_glb(path: &Path, b: &[u8]) -> Result<(), IoError> {
     Ok(())
 }
 
-/// Reads the first mesh of a glTF or GLB file with its morph targets and morph-weight
-/// animation (see the [module documentation](super)).
+/// How [`parse_gltf_morphs_with`] reads a file.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct GltfReadOptions {
+    /// The name of the mesh to read. `None` (default): the mesh with morph targets (an error
+    /// listing the names when several meshes have them), or the first mesh when none has.
+    pub mesh: Option<String>,
+}
+
+/// Reads the mesh with morph targets of a glTF or GLB file, with its morph-weight animation
+/// (see the [module documentation](super)); [`read_gltf_morphs_with`] with the default
+/// [`GltfReadOptions`].
 ///
 /// Errors: unreadable, empty or truncated files (GLB truncation names the byte offset), files
-/// the `gltf` crate rejects, no mesh, non-triangle primitives, `POSITION` not `f32` VEC3,
-/// accessors reaching past their buffer, an index out of range (naming primitive and index),
-/// primitives with different numbers of morph targets, a morph target whose `POSITION`
-/// accessor has another count than the base `POSITION`, and weight outputs whose count does
-/// not match keys × targets.
+/// the `gltf` crate rejects, a required extension morphkit does not decode (named), no mesh,
+/// several meshes with morph targets (listing their names), non-triangle primitives,
+/// `POSITION` not VEC3, accessors reaching past their buffer view, an index out of range
+/// (naming primitive and index), primitives with different numbers of morph targets, a morph
+/// target whose `POSITION` accessor has another count than the base `POSITION`, and weight
+/// outputs whose count does not match keys × targets. Errors name the mesh and primitive.
 pub fn read_gltf_morphs(path: &Path) -> Result<GltfMorphs, IoError> {
     parse_gltf_morphs(path, read_file(path)?)
+}
+
+/// [`read_gltf_morphs`] with options (which mesh to read).
+pub fn read_gltf_morphs_with(path: &Path, opts: &GltfReadOptions) -> Result<GltfMorphs, IoError> {
+    parse_gltf_morphs_with(path, read_file(path)?, opts)
 }
 
 /// Like [`read_gltf_morphs`], on the file's bytes (GLB or glTF JSON). `path` names the file in
 /// errors, says whether it should be GLB (by extension), and is the base of relative buffer
 /// URIs.
 pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoError> {
+    parse_gltf_morphs_with(path, bytes, &GltfReadOptions::default())
+}
+
+/// [`parse_gltf_morphs`] with options (which mesh to read).
+///
+/// Positions are those of the mesh, in its own space: the transforms of the nodes using it
+/// are not applied (a quantized file, `KHR_mesh_quantization`, usually keeps its dequantizing
+/// scale and offset on the node, so its positions are in integer units).
+pub fn parse_gltf_morphs_with(
+    path: &Path,
+    bytes: Vec<u8>,
+    opts: &GltfReadOptions,
+) -> Result<GltfMorphs, IoError> {
     let is_glb = bytes.starts_with(b"glTF");
     if is_glb {
         check_glb(path, &bytes)?;
@@ -124,18 +152,25 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
         cause: source,
     };
     super::precheck::check_positions(path, super::super::strip_bom(&bytes))?;
-    let mut gltf = if is_glb {
-        ::gltf::Gltf::from_slice(&bytes)
+    let (json, blob): (Cow<[u8]>, Option<Vec<u8>>) = if is_glb {
+        let glb = ::gltf::Glb::from_slice(&bytes).map_err(gerr)?;
+        (
+            Cow::Owned(glb.json.into_owned()),
+            glb.bin.map(Cow::into_owned),
+        )
     } else {
-        ::gltf::Gltf::from_slice(super::super::strip_bom(&bytes))
-    }
-    .map_err(gerr)?;
+        (Cow::Borrowed(super::super::strip_bom(&bytes)), None)
+    };
+    let stripped = extensions::strip_required(path, &json)?;
+    let gltf = ::gltf::Gltf::from_slice_without_validation(stripped.as_deref().unwrap_or(&json))
+        .map_err(gerr)?;
+    validate(&gltf.document).map_err(gerr)?;
+    drop((json, stripped));
     // The file's bytes are no longer needed: the BIN chunk was copied into the blob.
     drop(bytes);
-    let buffers = load_buffers(path, &gltf.document, gltf.blob.take())?;
-    // glTF requires count ≥ 1; the gltf crate's readers compute `count - 1` unchecked (an
-    // overflow found by cargo fuzz).
-    if let Some(a) = gltf.document.accessors().find(|a| a.count() == 0) {
+    let doc = &gltf.document;
+    // glTF requires count ≥ 1 (the gltf crate computed `count - 1` unchecked; cargo fuzz).
+    if let Some(a) = doc.accessors().find(|a| a.count() == 0) {
         return Err(IoError::content(
             path,
             format!(
@@ -144,12 +179,137 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
             ),
         ));
     }
-    let get = |b: ::gltf::Buffer| buffers.get(b.index()).map(|d| &d[..]);
-    let doc = &gltf.document;
-    let mesh = doc
+    let fallback = extensions::fallback_buffers(doc);
+    let buffers = load_buffers(path, doc, blob, &fallback)?;
+    let views = extensions::decode_views(path, doc, &buffers)?;
+    let data = Data {
+        buffers: &buffers,
+        views: &views,
+    };
+    let mesh = choose_mesh(path, doc, opts)?;
+    let (base, displacements) = read_mesh(path, &mesh, &data)?;
+    // Displacements become absolute positions in place (no second copy of every target).
+    let mut targets = displacements;
+    for d in &mut targets {
+        for (q, b) in d.iter_mut().zip(&base.positions) {
+            *q = [b[0] + q[0], b[1] + q[1], b[2] + q[2]];
+        }
+    }
+    if mesh.index() == 0 {
+        if let Some((target_names, targets, weight_keys)) =
+            super::read_chunks::read_split(path, doc, &data, &base.positions)?
+        {
+            return Ok(GltfMorphs {
+                base,
+                target_names,
+                targets,
+                weight_keys,
+            });
+        }
+    }
+    let target_names = target_names(mesh.extras(), targets.len());
+    let weight_keys = weight_keys(path, doc, mesh.index(), targets.len(), &data)?;
+    Ok(GltfMorphs {
+        base,
+        target_names,
+        targets,
+        weight_keys,
+    })
+}
+
+/// The `gltf` crate's validation, except that an accessor may have neither a buffer view nor
+/// sparse values (glTF 2.0 §5.1.1: it is then all zeros; gltf-transform writes such accessors
+/// for all-zero morph-target normals), and that textures, images and materials, which are not
+/// read, are not checked.
+fn validate(doc: &::gltf::Document) -> Result<(), ::gltf::Error> {
+    use ::gltf::json::validation::{Error, Validate};
+    let root = doc.as_json();
+    let mut errors = Vec::new();
+    root.validate(root, ::gltf::json::Path::new, &mut |path, error| {
+        let p = path();
+        let zeros = matches!(error, Error::Missing)
+            && p.as_str().starts_with("accessors[")
+            && p.as_str().ends_with("].bufferView");
+        // Never read; a texture of KHR_texture_basisu or EXT_texture_webp has no `source`.
+        let unread = ["textures[", "images[", "materials["]
+            .iter()
+            .any(|k| p.as_str().starts_with(k));
+        if !zeros && !unread {
+            errors.push((p, error));
+        }
+    });
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(::gltf::Error::Validation(errors))
+    }
+}
+
+/// How errors and listings name a mesh: `mesh 2 'Face'`.
+pub(super) fn mesh_label(m: &::gltf::Mesh) -> String {
+    match m.name() {
+        Some(n) => format!("mesh {} '{n}'", m.index()),
+        None => format!("mesh {} (unnamed)", m.index()),
+    }
+}
+
+/// The mesh to read: the one named in `opts`, else the one with morph targets, else the first.
+fn choose_mesh<'a>(
+    path: &Path,
+    doc: &'a ::gltf::Document,
+    opts: &GltfReadOptions,
+) -> Result<::gltf::Mesh<'a>, IoError> {
+    let all = || {
+        doc.meshes()
+            .map(|m| mesh_label(&m))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    if let Some(name) = &opts.mesh {
+        return doc
+            .meshes()
+            .find(|m| m.name() == Some(name.as_str()))
+            .ok_or_else(|| {
+                IoError::content(
+                    path,
+                    format!("the file has no mesh named '{name}'; its meshes: {}", all()),
+                )
+            });
+    }
+    let morph: Vec<_> = doc
         .meshes()
-        .next()
-        .ok_or_else(|| IoError::content(path, "the file has no mesh"))?;
+        .filter(|m| m.primitives().any(|p| p.morph_targets().next().is_some()))
+        .collect();
+    // A split rig (`extras.morphkitTargets`, see read_chunks) is one rig over several meshes.
+    let split = morph.first().is_some_and(|m| m.index() == 0)
+        && morph
+            .iter()
+            .all(|m| super::read_chunks::rig_indices(m.extras()).is_some());
+    match morph.len() {
+        0 => doc
+            .meshes()
+            .next()
+            .ok_or_else(|| IoError::content(path, "the file has no mesh")),
+        1 => Ok(morph[0].clone()),
+        _ if split => Ok(morph[0].clone()),
+        n => Err(IoError::content(
+            path,
+            format!(
+                "{n} meshes have morph targets ({}); choose one by name (GltfReadOptions::mesh)",
+                morph.iter().map(mesh_label).collect::<Vec<_>>().join(", ")
+            ),
+        )),
+    }
+}
+
+/// The base mesh (all triangle primitives merged, indices offset by the vertices before) and
+/// the morph-target displacements of `mesh`.
+fn read_mesh(
+    path: &Path,
+    mesh: &::gltf::Mesh,
+    data: &Data,
+) -> Result<(TriMesh, Vec<Vec<Point>>), IoError> {
+    let label = mesh_label(mesh);
     let mut positions: Vec<Point> = Vec::new();
     let mut polys = Polygons {
         offsets: vec![0],
@@ -157,7 +317,7 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
     };
     let mut displacements: Vec<Vec<Point>> = Vec::new();
     for (pi, prim) in mesh.primitives().enumerate() {
-        let at = |m: String| IoError::content(path, format!("mesh 0, primitive {pi}: {m}"));
+        let at = |m: String| IoError::content(path, format!("{label}, primitive {pi}: {m}"));
         if prim.mode() != Mode::Triangles {
             return Err(at(format!(
                 "mode {:?}; only triangles are supported",
@@ -167,55 +327,41 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
         let pos_acc = prim
             .get(&Semantic::Positions)
             .ok_or_else(|| at("no POSITION attribute".into()))?;
-        if pos_acc.data_type() != DataType::F32 || pos_acc.dimensions() != Dimensions::Vec3 {
+        let p = accessor::read_vec3(&pos_acc, data).map_err(|m| at(format!("POSITION {m}")))?;
+        if let Some(v) = p.iter().position(|q| q.iter().any(|x| !x.is_finite())) {
             return Err(at(format!(
-                "POSITION accessor {} is {:?} {:?}, expected f32 VEC3",
-                pos_acc.index(),
-                pos_acc.data_type(),
-                pos_acc.dimensions()
+                "POSITION: vertex {v} has a non-finite coordinate"
             )));
         }
-        let n = pos_acc.count();
-        let reader = prim.reader(get);
-        let p: Vec<[f32; 3]> = reader
-            .read_positions()
-            .ok_or_else(|| at(format!("POSITION accessor {} has no data", pos_acc.index())))?
-            .collect();
-        if p.len() != n {
-            return Err(at(format!(
-                "POSITION accessor {} has {n} elements but its buffer holds {}",
-                pos_acc.index(),
-                p.len()
-            )));
-        }
-        let offset = positions.len() as u32;
-        // The gltf crate's index reader panics (unreachable!) on other component types.
-        if let Some(acc) = prim.indices() {
-            if !matches!(
-                acc.data_type(),
-                DataType::U8 | DataType::U16 | DataType::U32
-            ) {
-                return Err(at(format!(
-                    "index accessor {} is {:?}, expected an unsigned integer type",
-                    acc.index(),
-                    acc.data_type()
-                )));
+        let n = p.len();
+        let offset = u32::try_from(positions.len())
+            .ok()
+            .filter(|o| o.checked_add(n as u32).is_some() && n <= u32::MAX as usize)
+            .ok_or_else(|| at("too many vertices".into()))?;
+        let idx: Vec<u32> = match prim.indices() {
+            Some(acc) => {
+                if acc.dimensions() != Dimensions::Scalar
+                    || !matches!(
+                        acc.data_type(),
+                        DataType::U8 | DataType::U16 | DataType::U32
+                    )
+                {
+                    return Err(at(format!(
+                        "index accessor {} is {:?} {:?}, expected an unsigned integer type (SCALAR)",
+                        acc.index(),
+                        acc.data_type(),
+                        acc.dimensions()
+                    )));
+                }
+                accessor::read(&acc, data)
+                    .map_err(|m| at(format!("indices: {m}")))?
+                    .into_iter()
+                    .map(|i| i as u32)
+                    .collect()
             }
-        }
-        let idx: Vec<u32> = match reader.read_indices() {
-            Some(r) => r.into_u32().collect(),
+            // Non-indexed: consecutive vertex triples.
             None => (0..n as u32).collect(),
         };
-        if let Some(acc) = prim.indices() {
-            if idx.len() != acc.count() {
-                return Err(at(format!(
-                    "index accessor {} has {} elements but its buffer holds {}",
-                    acc.index(),
-                    acc.count(),
-                    idx.len()
-                )));
-            }
-        }
         if !idx.len().is_multiple_of(3) {
             return Err(at(format!("{} indices is not a multiple of 3", idx.len())));
         }
@@ -228,7 +374,6 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
             polys.indices.extend(t.iter().map(|&i| i + offset));
             polys.offsets.push(polys.indices.len() as u32);
         }
-        // Morph targets: check counts first, then read.
         let targets: Vec<_> = prim.morph_targets().collect();
         if pi > 0 && targets.len() != displacements.len() {
             return Err(at(format!(
@@ -241,209 +386,28 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
             displacements = vec![Vec::new(); targets.len()];
         }
         for (t, target) in targets.iter().enumerate() {
-            if let Some(acc) = target.positions() {
-                if acc.count() != n {
-                    return Err(at(format!(
-                        "morph target {t}: POSITION accessor {} has {} elements, the base POSITION has {n}",
-                        acc.index(),
-                        acc.count()
-                    )));
-                }
-                if acc.data_type() != DataType::F32 || acc.dimensions() != Dimensions::Vec3 {
-                    return Err(at(format!(
-                        "morph target {t}: POSITION accessor {} is not f32 VEC3",
-                        acc.index()
-                    )));
-                }
-            }
-        }
-        for (t, (tp, _, _)) in reader.read_morph_targets().enumerate() {
-            let d: Vec<[f32; 3]> = match tp {
-                Some(it) => it.collect(),
-                None => vec![[0.0; 3]; n],
+            let Some(acc) = target.positions() else {
+                displacements[t].extend(std::iter::repeat_n([0.0; 3], n));
+                continue;
             };
-            if d.len() != n {
+            if acc.count() != n {
                 return Err(at(format!(
-                    "morph target {t}: the buffer holds only {} of {n} displacements",
-                    d.len()
+                    "morph target {t}: POSITION accessor {} has {} elements, the base POSITION has {n}",
+                    acc.index(),
+                    acc.count()
                 )));
             }
+            let d = accessor::read_vec3(&acc, data)
+                .map_err(|m| at(format!("morph target {t}: POSITION {m}")))?;
             if let Some(v) = d.iter().position(|q| q.iter().any(|x| !x.is_finite())) {
                 return Err(at(format!(
                     "morph target {t}: vertex {v} has a non-finite displacement {:?}",
                     d[v]
                 )));
             }
-            displacements[t].extend(d.iter().map(|q| q.map(f64::from)));
+            displacements[t].extend(d);
         }
-        positions.extend(p.iter().map(|q| q.map(f64::from)));
+        positions.extend(p);
     }
-    if let Some(v) = positions
-        .iter()
-        .position(|q| q.iter().any(|x| !x.is_finite()))
-    {
-        return Err(IoError::content(
-            path,
-            format!("mesh 0: vertex {v} has a non-finite coordinate"),
-        ));
-    }
-    let base = TriMesh::from_polygons(positions, polys);
-    // Displacements become absolute positions in place (no second copy of every target).
-    let mut targets = displacements;
-    for d in &mut targets {
-        for (q, b) in d.iter_mut().zip(&base.positions) {
-            *q = [b[0] + q[0], b[1] + q[1], b[2] + q[2]];
-        }
-    }
-    if let Some((target_names, targets, weight_keys)) =
-        super::read_chunks::read_split(path, doc, &buffers, &base.positions)?
-    {
-        return Ok(GltfMorphs {
-            base,
-            target_names,
-            targets,
-            weight_keys,
-        });
-    }
-    let target_names = target_names(mesh.extras(), targets.len());
-    let weight_keys = weight_keys(path, doc, mesh.index(), targets.len(), &get)?;
-    Ok(GltfMorphs {
-        base,
-        target_names,
-        targets,
-        weight_keys,
-    })
-}
-
-/// `extras.targetNames` when it is an array of as many strings as targets, else `target_k`.
-pub(super) fn target_names(extras: &::gltf::json::Extras, n: usize) -> Vec<String> {
-    let names = extras
-        .as_ref()
-        .and_then(|raw| serde_json::from_str::<serde_json::Value>(raw.get()).ok())
-        .and_then(|v| {
-            let a = v.get("targetNames")?.as_array()?.clone();
-            a.iter()
-                .map(|s| s.as_str().map(str::to_string))
-                .collect::<Option<Vec<_>>>()
-        });
-    match names {
-        Some(v) if v.len() == n => v,
-        _ => (0..n).map(|k| format!("target_{k}")).collect(),
-    }
-}
-
-pub(super) fn weight_keys<'a, 's>(
-    path: &Path,
-    doc: &'a ::gltf::Document,
-    mesh: usize,
-    num_targets: usize,
-    get: &(impl Clone + Fn(::gltf::Buffer<'a>) -> Option<&'s [u8]>),
-) -> Result<Vec<(f64, Vec<f64>)>, IoError> {
-    if num_targets == 0 {
-        return Ok(Vec::new());
-    }
-    for anim in doc.animations() {
-        for ch in anim.channels() {
-            let target = ch.target();
-            // Read the raw JSON: `property()` and `node()` unwrap values that the `gltf`
-            // crate's validation lets through (an unknown path panicked; found by cargo fuzz).
-            let aj = &doc.as_json().animations[anim.index()];
-            let tj = &aj.channels[ch.index()].target;
-            if tj.path != Checked::Valid(Property::MorphTargetWeights)
-                || tj.node.value() >= doc.nodes().len()
-                || target.node().mesh().map(|m| m.index()) != Some(mesh)
-            {
-                continue;
-            }
-            let at = |m: String| {
-                IoError::content(
-                    path,
-                    format!("animation {}, channel {}: {m}", anim.index(), ch.index()),
-                )
-            };
-            // The gltf crate's readers assert that an accessor's element size matches what
-            // they decode (a VEC3 input panicked; found by cargo fuzz): check types first.
-            let (input, output) = (ch.sampler().input(), ch.sampler().output());
-            if input.dimensions() != Dimensions::Scalar || input.data_type() != DataType::F32 {
-                return Err(at(format!(
-                    "the input accessor {} must be SCALAR float (key times), not {:?} {:?}",
-                    input.index(),
-                    input.dimensions(),
-                    input.data_type()
-                )));
-            }
-            let weight_type = matches!(
-                output.data_type(),
-                DataType::F32 | DataType::I8 | DataType::U8 | DataType::I16 | DataType::U16
-            );
-            if output.dimensions() != Dimensions::Scalar || !weight_type {
-                return Err(at(format!(
-                    "the output accessor {} must be SCALAR weights, not {:?} {:?}",
-                    output.index(),
-                    output.dimensions(),
-                    output.data_type()
-                )));
-            }
-            let reader = ch.reader(get.clone());
-            let times: Vec<f32> = reader
-                .read_inputs()
-                .ok_or_else(|| at("the input accessor has no data".into()))?
-                .collect();
-            let Some(ReadOutputs::MorphTargetWeights(w)) = reader.read_outputs() else {
-                return Err(at("the output accessor has no weight data".into()));
-            };
-            let w: Vec<f32> = w.into_f32().collect();
-            let sampler = aj.samplers.get(aj.channels[ch.index()].sampler.value());
-            let interpolation = match sampler.map(|s| s.interpolation) {
-                Some(Checked::Valid(i)) => i,
-                _ => return Err(at("the sampler's interpolation is not valid".into())),
-            };
-            let per_key = if interpolation == Interpolation::CubicSpline {
-                3 * num_targets
-            } else {
-                num_targets
-            };
-            if w.len() != times.len() * per_key {
-                return Err(at(format!(
-                    "{} weights for {} keys × {} targets",
-                    w.len(),
-                    times.len(),
-                    num_targets
-                )));
-            }
-            if let Some(k) = times.iter().position(|t| !t.is_finite()) {
-                return Err(at(format!("key {k} has a non-finite time {}", times[k])));
-            }
-            let skip = if per_key > num_targets {
-                num_targets
-            } else {
-                0
-            };
-            for (k, c) in w.chunks_exact(per_key).enumerate() {
-                if let Some(t) = c[skip..skip + num_targets]
-                    .iter()
-                    .position(|x| !x.is_finite())
-                {
-                    return Err(at(format!(
-                        "key {k}: the weight of target {t} is not finite ({})",
-                        c[skip + t]
-                    )));
-                }
-            }
-            return Ok(times
-                .iter()
-                .zip(w.chunks_exact(per_key))
-                .map(|(&t, c)| {
-                    (
-                        t as f64,
-                        c[skip..skip + num_targets]
-                            .iter()
-                            .map(|&x| x as f64)
-                            .collect(),
-                    )
-                })
-                .collect());
-        }
-    }
-    Ok(Vec::new())
+    Ok((TriMesh::from_polygons(positions, polys), displacements))
 }

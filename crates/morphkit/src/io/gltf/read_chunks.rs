@@ -2,13 +2,14 @@
 //! [module documentation](super)): meshes whose `extras.morphkitTargets` give the rig index of
 //! each of their targets, each played by its own node's `weights` channel over a window of keys.
 
-use super::read::{target_names, weight_keys};
+use super::accessor::{self, Data};
+use super::anim::{target_names, weight_keys};
 use crate::io::IoError;
 use crate::mesh::Point;
 use std::path::Path;
 
 /// `extras.morphkitTargets` of a mesh, when present.
-fn rig_indices(extras: &::gltf::json::Extras) -> Option<Vec<usize>> {
+pub(super) fn rig_indices(extras: &::gltf::json::Extras) -> Option<Vec<usize>> {
     let v: serde_json::Value = serde_json::from_str(extras.as_ref()?.get()).ok()?;
     v.get("morphkitTargets")?
         .as_array()?
@@ -24,10 +25,9 @@ fn rig_indices(extras: &::gltf::json::Extras) -> Option<Vec<usize>> {
 pub(super) fn read_split(
     path: &Path,
     doc: &::gltf::Document,
-    buffers: &[Vec<u8>],
+    data: &Data,
     base: &[Point],
 ) -> Result<Option<(Vec<String>, Vec<Vec<Point>>, Vec<(f64, Vec<f64>)>)>, IoError> {
-    let get = |b: ::gltf::Buffer| buffers.get(b.index()).map(|d| &d[..]);
     let parts: Vec<(::gltf::Mesh, Vec<usize>)> = doc
         .meshes()
         .filter_map(|m| rig_indices(m.extras()).map(|r| (m, r)))
@@ -73,9 +73,12 @@ pub(super) fn read_split(
             )));
         }
         let local_names = target_names(mesh.extras(), rig.len());
-        let reader = prim.reader(get);
-        for (j, (tp, _, _)) in reader.read_morph_targets().enumerate() {
-            let d: Vec<[f32; 3]> = tp.map(|it| it.collect()).unwrap_or_default();
+        for (j, target) in local.iter().enumerate() {
+            let d = match target.positions() {
+                Some(acc) => accessor::read_vec3(&acc, data)
+                    .map_err(|m| at(format!("morph target {j}: POSITION {m}")))?,
+                None => vec![[0.0; 3]; nv],
+            };
             if d.len() != nv || d.iter().flatten().any(|x| !x.is_finite()) {
                 return Err(at(format!(
                     "morph target {j} has {} finite displacements, the base has {nv} vertices",
@@ -87,13 +90,13 @@ pub(super) fn read_split(
                 targets[g] = Some(
                     d.iter()
                         .zip(base)
-                        .map(|(q, b)| [b[0] + q[0] as f64, b[1] + q[1] as f64, b[2] + q[2] as f64])
+                        .map(|(q, b)| [b[0] + q[0], b[1] + q[1], b[2] + q[2]])
                         .collect(),
                 );
                 names[g] = local_names[j].clone();
             }
         }
-        for (t, w) in weight_keys(path, doc, mi, rig.len(), &get)? {
+        for (t, w) in weight_keys(path, doc, mi, rig.len(), data)? {
             if keys.last().is_some_and(|(last, _)| t <= *last) {
                 continue;
             }
