@@ -5,7 +5,7 @@
 //! | OBJ | [`obj`] | [`obj`] | `v`/`f` only, polygons kept, full `f64` precision; `.obj.gz` both ways |
 //! | PLY | [`ply`] | [`ply`] | ascii and binary; written binary little endian, optionally coloured |
 //! | OFF | [`off`] | [`off`] | |
-//! | glTF / GLB | [`gltf`] | [`gltf`] | first mesh; morph targets and morph-weight animations |
+//! | glTF / GLB | [`gltf`] | [`gltf`] | the mesh with morph targets (or the first; choose by name with [`GltfReadOptions`]); quantized, meshopt and sparse accessors; morph-weight animations |
 //! | PC2 | [`pc2`] | [`pc2`] | positions only; connectivity from a reference mesh |
 //! | USD (`.usda`) | [`usd`] (minimal) | [`usd`] | time-sampled `points`; `UsdSkel` blend shapes |
 //! | weights | [`weights`] | | per-frame blend weights, JSON or CSV |
@@ -40,9 +40,9 @@ pub use error::IoError;
 pub use format::Format;
 pub use frame_stream::FrameStream;
 pub use gltf::{
-    parse_gltf_morphs, read_gltf_morphs, write_gltf_morphs, write_gltf_scene,
-    write_gltf_scene_with, write_gltf_with, GltfMorphs, GltfOptions, GltfRigidMesh, GltfSummary,
-    SAFE_MORPH_TARGETS,
+    parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs, read_gltf_morphs_with,
+    write_gltf_morphs, write_gltf_scene, write_gltf_scene_with, write_gltf_with, GltfMorphs,
+    GltfOptions, GltfReadOptions, GltfRigidMesh, GltfSummary, SAFE_MORPH_TARGETS,
 };
 pub use ply::{write_ply_colored, PlyEncoding};
 pub use sequence::{
