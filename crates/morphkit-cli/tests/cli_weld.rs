@@ -2,122 +2,14 @@
 //! the solve, and the result comes back in the input's own layout, equal to the unsplit one.
 
 mod common;
+use common::split::*;
 use common::*;
 use std::path::{Path, PathBuf};
 
-type Mesh = (Vec<[f64; 3]>, Vec<Vec<usize>>);
-
-fn read(p: &Path) -> Mesh {
-    let text = std::fs::read_to_string(p).unwrap();
-    let (mut v, mut f) = (Vec::new(), Vec::new());
-    for l in text.lines() {
-        let t: Vec<&str> = l.split_whitespace().collect();
-        match t.first() {
-            Some(&"v") => v.push([t[1], t[2], t[3]].map(|x| x.parse().unwrap())),
-            Some(&"f") => f.push(
-                t[1..]
-                    .iter()
-                    .map(|x| x.split('/').next().unwrap().parse::<usize>().unwrap() - 1)
-                    .collect(),
-            ),
-            _ => {}
-        }
-    }
-    (v, f)
-}
-
-fn write(p: &Path, (v, f): &Mesh) {
-    let mut s = String::new();
-    for q in v {
-        s += &format!("v {} {} {}\n", q[0], q[1], q[2]);
-    }
-    for t in f {
-        s += "f";
-        for i in t {
-            s += &format!(" {}", i + 1);
-        }
-        s += "\n";
-    }
-    std::fs::write(p, s).unwrap();
-}
-
-/// Splits the meshes `shapes` (one connectivity) as an exporter does at a UV seam: the faces
-/// whose base centroid has y > 0 take copies of the vertices they share with the others;
-/// with `shuffle`, the vertices are also reordered. Returns the split meshes and, for each
-/// split vertex, its vertex in the unsplit mesh.
+/// The split meshes and, for each split vertex, its unsplit vertex.
 fn split(shapes: &[Mesh], shuffle: bool) -> (Vec<Mesh>, Vec<usize>) {
-    let (v0, f) = &shapes[0];
-    let upper: Vec<bool> = f
-        .iter()
-        .map(|t| t.iter().map(|&i| v0[i][1]).sum::<f64>() > 0.0)
-        .collect();
-    let n = v0.len();
-    let (mut a, mut b) = (vec![false; n], vec![false; n]);
-    for (t, &u) in f.iter().zip(&upper) {
-        for &i in t {
-            if u {
-                a[i] = true
-            } else {
-                b[i] = true
-            }
-        }
-    }
-    let seam: Vec<usize> = (0..n).filter(|&i| a[i] && b[i]).collect();
-    assert!(seam.len() > 10, "the split must cut a seam");
-    let mut copy = vec![usize::MAX; n];
-    for (k, &v) in seam.iter().enumerate() {
-        copy[v] = n + k;
-    }
-    let mut origin: Vec<usize> = (0..n).chain(seam.iter().copied()).collect();
-    let mut order: Vec<usize> = (0..origin.len()).collect();
-    if shuffle {
-        // A fixed LCG permutation: exporters interleave the copies.
-        let mut x: u64 = 12345;
-        for i in (1..order.len()).rev() {
-            x = x
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            order.swap(i, (x >> 33) as usize % (i + 1));
-        }
-    }
-    let mut new_index = vec![0; order.len()];
-    for (k, &o) in order.iter().enumerate() {
-        new_index[o] = k;
-    }
-    let faces: Vec<Vec<usize>> = f
-        .iter()
-        .zip(&upper)
-        .map(|(t, &u)| {
-            t.iter()
-                .map(|&i| {
-                    new_index[if u && copy[i] != usize::MAX {
-                        copy[i]
-                    } else {
-                        i
-                    }]
-                })
-                .collect()
-        })
-        .collect();
-    let meshes = shapes
-        .iter()
-        .map(|(v, _)| {
-            let all: Vec<[f64; 3]> = origin.iter().map(|&o| v[o]).collect();
-            (order.iter().map(|&o| all[o]).collect(), faces.clone())
-        })
-        .collect();
-    origin = order.iter().map(|&o| origin[o]).collect();
-    (meshes, origin)
-}
-
-fn diagonal(v: &[[f64; 3]]) -> f64 {
-    let mut d = 0.0;
-    for k in 0..3 {
-        let lo = v.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
-        let hi = v.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
-        d += (hi - lo) * (hi - lo);
-    }
-    f64::sqrt(d)
+    let s = Split::new(shapes, shuffle);
+    (s.meshes, s.origin)
 }
 
 /// Blends `base` → `target` at α = ½, unsplit and split (appended and shuffled copies), and

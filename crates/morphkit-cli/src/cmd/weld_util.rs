@@ -80,21 +80,13 @@ pub fn welded_correspondence(
     {
         return c;
     }
-    let map = |w: &Weld, v: &mut u32| {
-        if let Some(&x) = w.to_welded().get(*v as usize) {
-            *v = x;
-        }
-    };
     c.source_vertices = source.num_welded();
     c.target_vertices = target.num_welded();
-    for [s, t] in &mut c.markers {
-        map(source, s);
-        map(target, t);
-    }
-    for r in &mut c.marker_residuals {
-        map(source, &mut r.source);
-        map(target, &mut r.target);
-    }
+    renumber(
+        &mut c,
+        |v| source.to_welded().get(v).copied(),
+        |v| target.to_welded().get(v).copied(),
+    );
     c
 }
 
@@ -104,22 +96,36 @@ pub fn input_correspondence(mut c: Correspondence, source: &Weld, target: &Weld)
     if (source.is_identity() && target.is_identity()) || c.identity {
         return c;
     }
-    let map = |w: &Weld, v: &mut u32| {
-        if let Some(&x) = w.representative().get(*v as usize) {
+    c.source_vertices = source.num_input();
+    c.target_vertices = target.num_input();
+    renumber(
+        &mut c,
+        |v| source.representative().get(v).copied(),
+        |v| target.representative().get(v).copied(),
+    );
+    c
+}
+
+/// Renumbers the markers and marker residuals of `c`: source vertex `v` becomes `source(v)`,
+/// target vertex `v` becomes `target(v)` (unchanged where they give `None`).
+fn renumber(
+    c: &mut Correspondence,
+    source: impl Fn(usize) -> Option<u32>,
+    target: impl Fn(usize) -> Option<u32>,
+) {
+    let map = |f: &dyn Fn(usize) -> Option<u32>, v: &mut u32| {
+        if let Some(x) = f(*v as usize) {
             *v = x;
         }
     };
-    c.source_vertices = source.num_input();
-    c.target_vertices = target.num_input();
     for [s, t] in &mut c.markers {
-        map(source, s);
-        map(target, t);
+        map(&source, s);
+        map(&target, t);
     }
     for r in &mut c.marker_residuals {
-        map(source, &mut r.source);
-        map(target, &mut r.target);
+        map(&source, &mut r.source);
+        map(&target, &mut r.target);
     }
-    c
 }
 
 /// [`CorrespondenceArgs::obtain`] on welded meshes: markers (input numbering) are mapped

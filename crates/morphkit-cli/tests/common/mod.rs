@@ -1,6 +1,8 @@
 //! Helpers shared by the CLI tests: run the built `morphkit` binary and check its outcome.
 #![allow(dead_code)]
 
+pub mod split;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

@@ -56,13 +56,39 @@ fn hex_prefix(b: &[u8]) -> String {
 /// Decompresses every gzip member of `raw` (which starts with the gzip magic).
 pub(crate) fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>, IoError> {
     let mut out = Vec::with_capacity(raw.len().saturating_mul(4));
-    let mut rest = raw;
+    gunzip_stream(path, raw, |chunk| {
+        out.extend_from_slice(chunk);
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+/// Decompresses the gzip members of `input` (which starts with the gzip magic) in chunks of
+/// at most 1 MiB, handing each to `on_chunk`. Zero bytes after the last member (tape padding)
+/// are ignored; other trailing data, a corrupt or a truncated member are errors naming the
+/// byte offset.
+fn gunzip_stream(
+    path: &Path,
+    mut input: impl BufRead,
+    mut on_chunk: impl FnMut(&[u8]) -> Result<(), IoError>,
+) -> Result<(), IoError> {
+    let mut chunk = vec![0u8; 1 << 20];
+    let mut offset = 0u64;
     let mut member = 0;
-    while !rest.is_empty() {
-        let offset = (raw.len() - rest.len()) as u64;
-        if member > 0 && !rest.starts_with(&GZIP_MAGIC) {
+    loop {
+        let head = input
+            .fill_buf()
+            .map_err(|e| IoError::os(path, "read the file", e))?;
+        if head.is_empty() {
+            return Ok(());
+        }
+        if member > 0 && !head.starts_with(&GZIP_MAGIC) {
+            let mut rest = Vec::new();
+            input
+                .read_to_end(&mut rest)
+                .map_err(|e| IoError::os(path, "read the file", e))?;
             if rest.iter().all(|&b| b == 0) {
-                break;
+                return Ok(());
             }
             return Err(IoError::binary(
                 path,
@@ -73,19 +99,30 @@ pub(crate) fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>, IoError> {
                 ),
             ));
         }
-        let mut dec = flate2::bufread::GzDecoder::new(rest);
-        if let Err(e) = dec.read_to_end(&mut out) {
-            let message = if e.kind() == std::io::ErrorKind::UnexpectedEof {
-                format!("the gzip stream (member {member}) is truncated")
-            } else {
-                format!("corrupt gzip stream (member {member}): {e}")
+        let start = offset;
+        let mut dec = flate2::bufread::GzDecoder::new(CountingReader {
+            inner: &mut input,
+            count: &mut offset,
+        });
+        loop {
+            let k = match dec.read(&mut chunk) {
+                Ok(k) => k,
+                Err(e) => {
+                    let message = if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                        format!("the gzip stream (member {member}) is truncated")
+                    } else {
+                        format!("corrupt gzip stream (member {member}): {e}")
+                    };
+                    return Err(IoError::binary(path, start, message));
+                }
             };
-            return Err(IoError::binary(path, offset, message));
+            if k == 0 {
+                break;
+            }
+            on_chunk(&chunk[..k])?;
         }
-        rest = dec.into_inner();
         member += 1;
     }
-    Ok(out)
 }
 
 /// The longest line [`for_each_line`] accepts: far beyond any mesh record (a face of 10⁵
@@ -121,58 +158,7 @@ pub(crate) fn for_each_line(
         return Ok(());
     }
     let mut lines = LineSplitter::default();
-    let mut chunk = vec![0u8; 1 << 20];
-    let mut offset = 0u64;
-    let mut member = 0;
-    loop {
-        let head = input
-            .fill_buf()
-            .map_err(|e| IoError::os(path, "read the file", e))?;
-        if head.is_empty() {
-            break;
-        }
-        if member > 0 && !head.starts_with(&GZIP_MAGIC) {
-            // Zero bytes after the last member (tape padding) are ignored; anything else is not.
-            let mut rest = Vec::new();
-            input
-                .read_to_end(&mut rest)
-                .map_err(|e| IoError::os(path, "read the file", e))?;
-            if rest.iter().all(|&b| b == 0) {
-                break;
-            }
-            return Err(IoError::binary(
-                path,
-                offset,
-                format!(
-                    "{} bytes of trailing data after the end of the gzip stream",
-                    rest.len()
-                ),
-            ));
-        }
-        let mut dec = flate2::bufread::GzDecoder::new(CountingReader {
-            inner: &mut input,
-            count: &mut offset,
-        });
-        loop {
-            let k = match dec.read(&mut chunk) {
-                Ok(k) => k,
-                Err(e) => {
-                    let message = if e.kind() == std::io::ErrorKind::UnexpectedEof {
-                        format!("the gzip stream (member {member}) is truncated")
-                    } else {
-                        format!("corrupt gzip stream (member {member}): {e}")
-                    };
-                    let at = *dec.get_ref().count;
-                    return Err(IoError::binary(path, at, message));
-                }
-            };
-            if k == 0 {
-                break;
-            }
-            lines.push(path, &chunk[..k], &mut f)?;
-        }
-        member += 1;
-    }
+    gunzip_stream(path, input, |chunk| lines.push(path, chunk, &mut f))?;
     if lines.bytes == 0 {
         return Err(IoError::Empty {
             path: path.to_path_buf(),
