@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 pub type Mesh = (Vec<[f64; 3]>, Vec<Vec<usize>>);
 
 /// Reads `p`'s `v` and `f` records.
-
 pub fn read(p: &Path) -> Mesh {
     let text = std::fs::read_to_string(p).unwrap();
     let (mut v, mut f) = (Vec::new(), Vec::new());
