@@ -169,18 +169,8 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
     // where they coincide in the neutral and every shape, the target's where they coincide in
     // the target; the shapes go back in the target's own layout.
     let input_target = target;
-    let source_weld = {
-        let all: Vec<&[morphkit::mesh::Point]> =
-            shapes.all_positions().iter().map(|p| &p[..]).collect();
-        weld_util::mesh_weld(&neutral, &all)
-    };
-    let target_weld = weld_util::mesh_weld(&input_target, &[]);
-    weld_util::announce(&source_weld, "the source");
-    weld_util::announce(&target_weld, "the target");
-    report["welded_vertices"] = json!({
-        "source": source_weld.merged(),
-        "target": target_weld.merged(),
-    });
+    let (source_weld, target_weld) =
+        weld_util::source_and_target(&neutral, &shapes, &input_target, &mut report);
     let neutral = source_weld.mesh(&neutral);
     let target = target_weld.mesh(&input_target);
     let shapes = if source_weld.is_identity() {

@@ -185,18 +185,8 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
     // where they coincide in the reference and every frame, the target's where they coincide
     // in the target; results go back in the target's own layout.
     let input_target = target;
-    let source_weld = {
-        let all: Vec<&[morphkit::mesh::Point]> =
-            frames.all_positions().iter().map(|p| &p[..]).collect();
-        weld_util::mesh_weld(&source_ref, &all)
-    };
-    let target_weld = weld_util::mesh_weld(&input_target, &[]);
-    weld_util::announce(&source_weld, "the source");
-    weld_util::announce(&target_weld, "the target");
-    report["welded_vertices"] = json!({
-        "source": source_weld.merged(),
-        "target": target_weld.merged(),
-    });
+    let (source_weld, target_weld) =
+        weld_util::source_and_target(&source_ref, &frames, &input_target, &mut report);
     let source_ref = source_weld.mesh(&source_ref);
     let target = target_weld.mesh(&input_target);
     if !source_weld.is_identity() {

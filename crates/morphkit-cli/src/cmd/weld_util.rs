@@ -43,6 +43,27 @@ pub fn announce(weld: &Weld, what: &str) {
     }
 }
 
+/// The welds of a source (`reference` with the positions of `shapes`, its animation or
+/// expressions) and of a target mesh, announced on stderr and recorded in `report` as
+/// `welded_vertices: {source, target}`.
+pub fn source_and_target(
+    reference: &TriMesh,
+    shapes: &morphkit::ShapeSet,
+    target: &TriMesh,
+    report: &mut serde_json::Value,
+) -> (Weld, Weld) {
+    let all: Vec<&[Point]> = shapes.all_positions().iter().map(|p| &p[..]).collect();
+    let source = mesh_weld(reference, &all);
+    let target = mesh_weld(target, &[]);
+    announce(&source, "the source");
+    announce(&target, "the target");
+    report["welded_vertices"] = serde_json::json!({
+        "source": source.merged(),
+        "target": target.merged(),
+    });
+    (source, target)
+}
+
 /// Input vertex `v` (named `what` in errors) in welded numbering.
 pub fn welded_id(weld: &Weld, v: u32, what: &str) -> anyhow::Result<u32> {
     match weld.to_welded().get(v as usize) {
