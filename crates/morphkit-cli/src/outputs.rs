@@ -463,6 +463,24 @@ impl Outputs {
             .write(path, false, |tmp| io::write_mesh(tmp, mesh))?)
     }
 
+    /// Stages one mesh; an `.obj`/`.obj.gz` with a `template` (the input's own OBJ) is that
+    /// file with the mesh's positions and recomputed normals, every other record kept.
+    pub fn mesh_like(
+        &mut self,
+        path: &Path,
+        mesh: &TriMesh,
+        template: Option<&io::ObjTemplate>,
+    ) -> anyhow::Result<()> {
+        match (template, Format::from_path(path)) {
+            (Some(t), Some(Format::Obj { gzip })) => {
+                Ok(self
+                    .staging
+                    .write(path, false, |tmp| t.write(tmp, &mesh.positions, gzip))?)
+            }
+            _ => self.mesh(path, mesh),
+        }
+    }
+
     /// Stages a binary PLY with colours.
     pub fn colored_ply(
         &mut self,
@@ -556,16 +574,18 @@ impl Outputs {
     }
 
     /// Stages an animation written frame by frame ([`io::FrameStream`]: a frame directory
-    /// when `dir`, else `.pc2`) of `frames` frames of `base`'s connectivity.
+    /// when `dir`, else `.pc2`) of `frames` frames of `base`'s connectivity; a directory's
+    /// frames are written into `template` where there is one.
     pub fn stream(
         &mut self,
         path: &Path,
         dir: bool,
         base: &TriMesh,
         frames: usize,
+        template: Option<io::ObjTemplate>,
     ) -> anyhow::Result<io::FrameStream> {
         let tmp = self.staging.stage(path, dir)?;
-        Ok(io::FrameStream::create(&tmp, path, dir, base, frames)?)
+        Ok(io::FrameStream::create(&tmp, path, dir, base, frames)?.with_obj_template(template))
     }
 
     /// Stages an output that `write` produces at the temporary path it is given (a file, or a

@@ -49,6 +49,22 @@ pub fn warn_carried(path: &Path, mesh: &morphkit::TriMesh) {
     }
 }
 
+/// The input `path` as an [`morphkit::io::ObjTemplate`] for outputs, when it is an OBJ of
+/// `vertices` vertices (results keep the input's layout).
+pub fn obj_template(
+    path: &Path,
+    vertices: usize,
+) -> anyhow::Result<Option<morphkit::io::ObjTemplate>> {
+    if !matches!(
+        morphkit::io::Format::from_path(path),
+        Some(morphkit::io::Format::Obj { .. })
+    ) {
+        return Ok(None);
+    }
+    let t = morphkit::io::ObjTemplate::read(path)?;
+    Ok((t.num_vertices() == vertices).then_some(t))
+}
+
 /// Prints `reading N files (X MiB)…` on stderr before reading inputs that are large, so a
 /// long read is never silent (the progress bars show only on a terminal).
 pub fn announce_reading(paths: &[PathBuf]) {

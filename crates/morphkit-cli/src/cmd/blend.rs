@@ -245,6 +245,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     crate::util::announce_reading(&inputs);
     let shapes = io::read_shape_set(&inputs)?;
     crate::util::warn_carried(&inputs[0], shapes.base());
+    // An OBJ base comes back as the artist's own file: texture coordinates, normals' hard
+    // edges, materials and groups kept (io::ObjTemplate).
+    let template = crate::util::obj_template(&inputs[0], shapes.num_vertices())?;
     let weights = frame_weights(a, shapes.len())?;
     for (k, w) in weights.iter().enumerate() {
         w.coefficients(shapes.len())
@@ -335,7 +338,13 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     // need every frame before the file.
     let dir_out = is_frame_dir(&a.out);
     let mut stream = if !single_mesh && io::FrameStream::supports(&a.out, dir_out) {
-        Some(outputs.stream(&a.out, dir_out, shapes.base(), weights.len())?)
+        Some(outputs.stream(
+            &a.out,
+            dir_out,
+            shapes.base(),
+            weights.len(),
+            template.clone(),
+        )?)
     } else {
         None
     };
@@ -420,7 +429,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     } else {
         let out_set = ShapeSet::new(shapes.base().clone(), frames)?;
         if single_mesh {
-            outputs.mesh(&a.out, &out_set.mesh(0))?;
+            outputs.mesh_like(&a.out, &out_set.mesh(0), template.as_ref())?;
         } else {
             let mut opts = FramesOptions {
                 fps: a.fps,

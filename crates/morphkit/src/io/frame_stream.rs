@@ -35,9 +35,18 @@ pub struct FrameStream {
     base: TriMesh,
     frames: usize,
     written: usize,
+    /// The artist's own OBJ that frames of a directory are written into.
+    template: Option<super::ObjTemplate>,
 }
 
 impl FrameStream {
+    /// Writes the frames of a frame directory into `template` (the input's own OBJ, every
+    /// record kept: [`super::ObjTemplate`]) instead of plain `v`/`f` OBJ files.
+    pub fn with_obj_template(mut self, template: Option<super::ObjTemplate>) -> Self {
+        self.template = template;
+        self
+    }
+
     /// Whether an animation to `dest` can be streamed: a frame directory (`dir`) or `.pc2`.
     pub fn supports(dest: &Path, dir: bool) -> bool {
         dir || matches!(super::Format::from_path(dest), Some(super::Format::Pc2))
@@ -79,6 +88,7 @@ impl FrameStream {
             base: base.clone(),
             frames,
             written: 0,
+            template: None,
         })
     }
 
@@ -99,9 +109,14 @@ impl FrameStream {
         match &mut self.sink {
             Sink::Dir => {
                 let name = format!("frame_{k:04}.obj");
-                let mesh = self.base.with_positions(positions.to_vec());
-                obj::write_obj(&self.at.join(&name), &mesh, false)
-                    .map_err(|e| e.at_path(&self.dest.join(&name)))?;
+                match &self.template {
+                    Some(t) => t.write(&self.at.join(&name), positions, false),
+                    None => {
+                        let mesh = self.base.with_positions(positions.to_vec());
+                        obj::write_obj(&self.at.join(&name), &mesh, false)
+                    }
+                }
+                .map_err(|e| e.at_path(&self.dest.join(&name)))?;
             }
             Sink::Pc2(w) => {
                 check_fits_f32(&self.dest, &format!("frame {k}"), positions)?;

@@ -24,6 +24,7 @@ mod format;
 mod frame_stream;
 pub mod gltf;
 pub mod obj;
+mod obj_template;
 pub mod off;
 pub mod pc2;
 pub mod ply;
@@ -44,6 +45,7 @@ pub use gltf::{
     write_gltf_morphs, write_gltf_scene, write_gltf_scene_with, write_gltf_with, GltfMorphs,
     GltfOptions, GltfReadOptions, GltfRigidMesh, GltfSummary, SAFE_MORPH_TARGETS,
 };
+pub use obj_template::ObjTemplate;
 pub use ply::{write_ply_colored, PlyEncoding};
 pub use sequence::{
     frames_to_gltf, gltf_to_frames, obj_files, read_animation, read_shape_set, read_shape_set_with,
