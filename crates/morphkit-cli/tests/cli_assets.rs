@@ -5,41 +5,6 @@
 mod common;
 use common::split::*;
 use common::*;
-use std::path::Path;
-
-/// `plain` with a material library, a group, smoothing, a texture coordinate and a normal per
-/// vertex, and faces that use them (`v/vt/vn`).
-fn dress(plain: &Path, dressed: &Path) {
-    let (v, f) = read(plain);
-    let mut s = String::from("# exported by a DCC tool\nmtllib tube.mtl\no Tube\n");
-    for p in &v {
-        s += &format!("v {} {} {}\n", p[0], p[1], p[2]);
-    }
-    for (k, _) in v.iter().enumerate() {
-        s += &format!("vt {} 0.5\n", k as f64 / v.len() as f64);
-    }
-    for _ in &v {
-        s += "vn 0 0 1\n";
-    }
-    s += "g body\nusemtl skin\ns 1\n";
-    for t in &f {
-        s += "f";
-        for &i in t {
-            s += &format!(" {0}/{0}/{0}", i + 1);
-        }
-        s += "\n";
-    }
-    std::fs::write(dressed, s).unwrap();
-}
-
-fn records(p: &Path, keep: impl Fn(&str) -> bool) -> Vec<String> {
-    std::fs::read_to_string(p)
-        .unwrap()
-        .lines()
-        .filter(|l| keep(l))
-        .map(String::from)
-        .collect()
-}
 
 #[test]
 fn a_blend_of_an_artists_obj_keeps_every_record_and_updates_positions_and_normals() {
@@ -89,5 +54,12 @@ fn a_blend_of_an_artists_obj_keeps_every_record_and_updates_positions_and_normal
             .all(|q| ((q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt() - 1.0).abs() < 1e-12));
         assert!(n.iter().filter(|q| q[2].abs() < 0.9).count() > n.len() / 2);
     }
+    // `convert` of an OBJ to an OBJ keeps the records too.
+    let copy = d.join("copy.obj.gz");
+    ok(&["convert", s(&da), s(&copy)]);
+    let plain_copy = d.join("copy.obj");
+    ok(&["convert", s(&copy), s(&plain_copy)]);
+    assert_eq!(records(&plain_copy, not_v), records(&da, not_v));
+    assert_eq!(read(&plain_copy).0, read(&da).0);
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -139,6 +139,26 @@ fn transfer_welds_split_source_and_target() {
     let _ = std::fs::remove_dir_all(&t.d);
 }
 
+/// Issue 37: an OBJ target comes back as the artist's file, with the transferred positions.
+#[test]
+fn transfer_writes_into_the_targets_own_obj() {
+    let t = Transfer::new("assets-transfer");
+    let m = t.markers("m.json", |q| q);
+    let reference = t.d.join("ref");
+    ok(&transfer_args(&t.src, &t.frames, &t.tgt, &m, &reference));
+    let dressed = t.d.join("dressed-target.obj");
+    dress(&t.tgt, &dressed);
+    let out = t.d.join("dressed-out");
+    ok(&transfer_args(&t.src, &t.frames, &dressed, &m, &out));
+    let not_v = |l: &str| !l.starts_with("v ") && !l.starts_with("vn ");
+    for k in 0..t.frames.len() {
+        let name = format!("frame_{k:04}.obj");
+        assert_eq!(records(&out.join(&name), not_v), records(&dressed, not_v));
+        assert_eq!(read(&out.join(&name)).0, read(&reference.join(&name)).0);
+    }
+    let _ = std::fs::remove_dir_all(&t.d);
+}
+
 #[test]
 fn correspond_welds_and_writes_for_the_input_meshes() {
     let t = Transfer::new("weld-correspond");

@@ -133,8 +133,13 @@ fn write_frames(
     Ok(())
 }
 
-fn write_mesh(mut outputs: Outputs, out: &Path, mesh: &TriMesh) -> anyhow::Result<()> {
-    outputs.mesh(out, mesh)?;
+fn write_mesh(
+    mut outputs: Outputs,
+    out: &Path,
+    mesh: &TriMesh,
+    template: Option<&io::ObjTemplate>,
+) -> anyhow::Result<()> {
+    outputs.mesh_like(out, mesh, template)?;
     outputs.commit()?;
     eprintln!(
         "wrote {}: {} vertices, {} triangles",
@@ -193,7 +198,7 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
     if sequence {
         let frames = read_sequence(&inputs)?;
         return match args.frame {
-            Some(k) => write_mesh(outputs, &out, &pick(&frames, k, ins.join(" "))?),
+            Some(k) => write_mesh(outputs, &out, &pick(&frames, k, ins.join(" "))?, None),
             None => write_frames(outputs, &out, &frames, &opts),
         };
     }
@@ -261,10 +266,13 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
             outputs,
             &out,
             &pick(&frames, k, input.display().to_string())?,
+            None,
         );
     }
     let mesh = io::read_mesh(input)?;
-    write_mesh(outputs, &out, &mesh)
+    // OBJ to OBJ keeps the artist's records (io::ObjTemplate).
+    let template = crate::util::obj_template(input, mesh.num_vertices())?;
+    write_mesh(outputs, &out, &mesh, template.as_ref())
 }
 
 /// Frame `k` of `frames` as a mesh; the error names `what` and the valid range.

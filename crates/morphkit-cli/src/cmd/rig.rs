@@ -218,8 +218,14 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
         }));
         targets.push(x);
     }
+    // An OBJ target's shapes come back as the artist's own file (io::ObjTemplate).
+    let template = crate::util::obj_template(&args.target, input_target.num_vertices())?;
     for (p, x) in shape_paths.iter().zip(&targets) {
-        outputs.mesh(p, &input_target.with_positions(x.clone()))?;
+        outputs.mesh_like(
+            p,
+            &input_target.with_positions(x.clone()),
+            template.as_ref(),
+        )?;
     }
     let rig = GltfMorphs {
         base: input_target.clone(),

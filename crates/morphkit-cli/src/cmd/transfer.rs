@@ -267,9 +267,11 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         );
     }
     let set = ShapeSet::new(input_target.clone(), out)?;
+    // An OBJ target comes back as the artist's own file (io::ObjTemplate).
     let frame_opts = FramesOptions {
         fps: args.fps,
         inputs,
+        obj_template: crate::util::obj_template(&args.target, input_target.num_vertices())?,
         ..FramesOptions::default()
     };
     outputs.frames(&args.out, &set, &frame_opts, |_| {})?;

@@ -149,3 +149,38 @@ pub fn diagonal(v: &[[f64; 3]]) -> f64 {
     }
     f64::sqrt(d)
 }
+
+/// `plain` with a material library, a group, smoothing, a texture coordinate and a normal per
+/// vertex, and faces that use them (`v/vt/vn`).
+pub fn dress(plain: &Path, dressed: &Path) {
+    let (v, f) = read(plain);
+    let mut s = String::from("# exported by a DCC tool\nmtllib tube.mtl\no Tube\n");
+    for p in &v {
+        s += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+    }
+    for (k, _) in v.iter().enumerate() {
+        s += &format!("vt {} 0.5\n", k as f64 / v.len() as f64);
+    }
+    for _ in &v {
+        s += "vn 0 0 1\n";
+    }
+    s += "g body\nusemtl skin\ns 1\n";
+    for t in &f {
+        s += "f";
+        for &i in t {
+            s += &format!(" {0}/{0}/{0}", i + 1);
+        }
+        s += "\n";
+    }
+    std::fs::write(dressed, s).unwrap();
+}
+
+/// The lines of `p` that `keep` keeps.
+pub fn records(p: &Path, keep: impl Fn(&str) -> bool) -> Vec<String> {
+    std::fs::read_to_string(p)
+        .unwrap()
+        .lines()
+        .filter(|l| keep(l))
+        .map(String::from)
+        .collect()
+}

@@ -26,6 +26,10 @@ pub struct FramesOptions {
     /// How a `.usda` output is written (prim name, up axis, units, custom data). Default
     /// [`UsdOptions::default`].
     pub usd: UsdOptions,
+    /// The artist's own OBJ that a frame directory's frames are written into, every record
+    /// kept ([`super::ObjTemplate`]); `None` (the default) or one of another vertex count
+    /// writes plain `v`/`f` frames.
+    pub obj_template: Option<super::ObjTemplate>,
 }
 
 impl Default for FramesOptions {
@@ -35,6 +39,7 @@ impl Default for FramesOptions {
             inputs: Vec::new(),
             gltf: GltfOptions::default(),
             usd: UsdOptions::default(),
+            obj_template: None,
         }
     }
 }
@@ -300,7 +305,11 @@ pub fn write_frames_with(
         ));
     }
     if is_frame_dir(out) {
-        return write_frame_dir(out, frames, &mut on_frame);
+        let template = opts
+            .obj_template
+            .as_ref()
+            .filter(|t| t.num_vertices() == frames.num_vertices());
+        return write_frame_dir(out, frames, template, &mut on_frame);
     }
     match Format::from_path(out) {
         Some(Format::Glb | Format::Gltf) => {
@@ -332,6 +341,7 @@ pub fn write_frames_with(
 fn write_frame_dir(
     out: &Path,
     frames: &ShapeSet,
+    template: Option<&super::ObjTemplate>,
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<(), IoError> {
     let existed = out.exists();
@@ -355,7 +365,11 @@ fn write_frame_dir(
         .map(|i| format!("frame_{i:04}.obj"))
         .collect();
     for (i, name) in names.iter().enumerate() {
-        if let Err(e) = obj::write_obj(&tmp.join(name), &frames.mesh(i), false) {
+        let written = match template {
+            Some(t) => t.write(&tmp.join(name), frames.positions(i), false),
+            None => obj::write_obj(&tmp.join(name), &frames.mesh(i), false),
+        };
+        if let Err(e) = written {
             let _ = std::fs::remove_dir_all(&tmp);
             temporaries::forget(&tmp);
             return Err(match e {
