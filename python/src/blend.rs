@@ -14,7 +14,8 @@ use crate::arrays::{self, to_array, to_array3};
 use crate::dict::to_dict;
 use crate::errors::{chain, new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
-use morphkit::mesh::{Point, ShapeSet, Weld, WELD_TOLERANCE};
+use crate::weld::{shape_weld, unweld, unweld_stats, weld_fixed};
+use morphkit::mesh::{ShapeSet, Weld};
 use morphkit::springs::{
     AnchorOptions, AnchorPlacement, BlendOptions, FixedVertices, FrameStats, InteriorMode,
     InteriorOptions, PhysicalBlend, PointTarget, SurfacePredictor, VolumetricBlend, Weights,
@@ -54,54 +55,6 @@ pub struct PyPhysicalBlend {
     weld: Option<Arc<Weld>>,
     /// Statistics of the last solve that finished.
     last: Mutex<Option<FrameStats>>,
-}
-
-/// The weld of `shapes` for a solve (`weld=True`), or `None` where nothing is welded (then
-/// nothing is copied or mapped: results are bit-identical to an unwelded solve).
-pub(crate) fn shape_weld(shapes: &ShapeSet, weld: bool) -> Option<Arc<Weld>> {
-    if !weld {
-        return None;
-    }
-    let w = Weld::of_shapes(shapes, WELD_TOLERANCE);
-    (!w.is_identity()).then(|| Arc::new(w))
-}
-
-/// `positions` of the welded mesh in the input's layout (as they are without a weld).
-pub(crate) fn unweld(weld: Option<&Weld>, positions: Vec<Point>) -> Vec<Point> {
-    match weld {
-        Some(w) => w.scatter(&positions),
-        None => positions,
-    }
-}
-
-/// Fixed vertex ids (input numbering, checked) in welded numbering.
-pub(crate) fn weld_fixed(weld: Option<&Weld>, fixed: FixedVertices) -> FixedVertices {
-    match (weld, fixed) {
-        (Some(w), FixedVertices::Ids(ids)) => {
-            let mut ids: Vec<u32> = ids.iter().map(|&v| w.to_welded()[v as usize]).collect();
-            ids.sort_unstable();
-            ids.dedup();
-            FixedVertices::Ids(ids)
-        }
-        (_, f) => f,
-    }
-}
-
-/// Statistics of a welded solve in input numbering: the unconverged vertices are every input
-/// vertex of an unconverged welded one.
-pub(crate) fn unweld_stats(weld: Option<&Weld>, mut stats: FrameStats) -> FrameStats {
-    if let Some(w) = weld {
-        if !stats.unconverged_vertices.is_empty() {
-            let mut failed = vec![false; w.num_welded()];
-            for &v in &stats.unconverged_vertices {
-                failed[v as usize] = true;
-            }
-            stats.unconverged_vertices = (0..w.num_input() as u32)
-                .filter(|&v| failed[w.to_welded()[v as usize] as usize])
-                .collect();
-        }
-    }
-    stats
 }
 
 /// Locks `m`, also after a panic in a solve (a library bug, raised as Python's

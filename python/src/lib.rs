@@ -14,6 +14,7 @@ mod metrics;
 mod scene;
 mod synth;
 mod transfer;
+mod weld;
 
 use pyo3::prelude::*;
 

@@ -164,9 +164,9 @@ fn keep(last: &Mutex<Option<SceneFrame>>, weld: Option<&Weld>, mut r: SceneFrame
             c.vertex = w.representative()[c.vertex as usize];
         }
     }
-    r.solver = crate::blend::unweld_stats(weld, r.solver);
+    r.solver = crate::weld::unweld_stats(weld, r.solver);
     *lock(last) = Some(r);
-    crate::blend::unweld(weld, positions)
+    crate::weld::unweld(weld, positions)
 }
 
 /// `(vertex, [(frame, (x, y, z)), …])` of a mesh of `vertices` vertices, the `i`th pull.
@@ -229,7 +229,7 @@ impl PySceneBlend {
         let input = crate::blend::shape_set(base, targets, faces)?;
         let (n, k) = (input.num_vertices(), input.len() - 1);
         // Split seams and hard edges are one vertex for the solve (as in PhysicalBlend).
-        let weld = crate::blend::shape_weld(&input, weld);
+        let weld = crate::weld::shape_weld(&input, weld);
         let welded;
         let shapes = match &weld {
             Some(w) => {
@@ -239,7 +239,7 @@ impl PySceneBlend {
             None => &input,
         };
         let mut opts = BlendOptions {
-            fixed: crate::blend::weld_fixed(
+            fixed: crate::weld::weld_fixed(
                 weld.as_deref(),
                 crate::blend::fixed_vertices(fixed, n)?,
             ),
@@ -332,7 +332,7 @@ impl PySceneBlend {
                 .map(|(k, r)| match r {
                     // The chunk's last frame is kept for `last_stats` when all succeeded.
                     Ok(f) if ok && k + 1 == n => Ok(keep(&self.last, self.weld.as_deref(), f)),
-                    Ok(f) => Ok(crate::blend::unweld(self.weld.as_deref(), f.positions)),
+                    Ok(f) => Ok(crate::weld::unweld(self.weld.as_deref(), f.positions)),
                     Err(e) => Err(chain(&e)),
                 })
                 .collect()

@@ -7,7 +7,8 @@ use crate::arrays::{self, to_array, to_array3};
 use crate::dict::to_dict;
 use crate::errors::{new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
-use morphkit::mesh::{Point, TriMesh, Weld, WELD_TOLERANCE};
+use crate::weld::{mesh_weld, unweld, welded_target_corr};
+use morphkit::mesh::{TriMesh, Weld};
 use morphkit::transfer::rig::{RigOptions, RigTransfer};
 use morphkit::transfer::{
     correspond, match_confidence, AnimationTransfer, Correspondence, CorrespondenceOptions,
@@ -28,68 +29,6 @@ pub struct PyCorrespondence {
     pub inner: Correspondence,
     /// The warped meshes (only after `from_markers`).
     warped: Option<(Vec<morphkit::mesh::Point>, Vec<morphkit::mesh::Point>)>,
-}
-
-/// The weld of one mesh for a solve (as the CLI's): vertices split at seams and hard edges
-/// (coincident within 1e-6 of the diagonal) are one vertex; `None` where nothing is welded,
-/// `weld` is false, or a triangle would be lost (triangles keep their ids).
-fn mesh_weld(mesh: &TriMesh, weld: bool) -> Option<Weld> {
-    if !weld {
-        return None;
-    }
-    let w = Weld::of_mesh(mesh, WELD_TOLERANCE);
-    (!w.is_identity() && w.keeps_triangles(&mesh.triangles)).then_some(w)
-}
-
-/// Vertex `v` through `map` (a vertex of another numbering), unchanged outside it.
-fn remap(map: &[u32], v: &mut u32) {
-    if let Some(&x) = map.get(*v as usize) {
-        *v = x;
-    }
-}
-
-/// A correspondence between numberings: counts and marker vertices of the source and target
-/// through `source`/`target` (`(map, new count)`; `None`: unchanged).
-fn renumber(
-    mut c: Correspondence,
-    source: Option<(&[u32], usize)>,
-    target: Option<(&[u32], usize)>,
-) -> Correspondence {
-    if c.identity {
-        return c;
-    }
-    if let Some((m, n)) = source {
-        c.source_vertices = n;
-        c.markers.iter_mut().for_each(|p| remap(m, &mut p[0]));
-        c.marker_residuals
-            .iter_mut()
-            .for_each(|r| remap(m, &mut r.source));
-    }
-    if let Some((m, n)) = target {
-        c.target_vertices = n;
-        c.markers.iter_mut().for_each(|p| remap(m, &mut p[1]));
-        c.marker_residuals
-            .iter_mut()
-            .for_each(|r| remap(m, &mut r.target));
-    }
-    c
-}
-
-/// A correspondence of the input target, for its welded mesh (one of another vertex count is
-/// left for the transfer to refuse).
-fn welded_target_corr(c: &Correspondence, w: &Weld) -> Correspondence {
-    if c.target_vertices != w.num_input() {
-        return c.clone();
-    }
-    renumber(c.clone(), None, Some((w.to_welded(), w.num_welded())))
-}
-
-/// `x` of the welded target in the input's layout.
-fn unweld(w: Option<&Weld>, x: Vec<Point>) -> Vec<Point> {
-    match w {
-        Some(w) => w.scatter(&x),
-        None => x,
-    }
 }
 
 /// Marker pairs: the path of a markers JSON file, or `(source, target)` vertex pairs, the
@@ -186,7 +125,7 @@ impl PyCorrespondence {
             fn back(w: &Option<Weld>) -> Option<(&[u32], usize)> {
                 w.as_ref().map(|w| (w.representative(), w.num_input()))
             }
-            r.correspondence = renumber(r.correspondence, back(&sw), back(&tw));
+            r.correspondence = r.correspondence.renumbered(back(&sw), back(&tw));
             if !r.correspondence.identity {
                 r.correspondence.markers = given.pairs;
             }

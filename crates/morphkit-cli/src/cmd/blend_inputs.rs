@@ -42,10 +42,7 @@ pub(super) fn welded_fixed(
             file.display()
         );
     }
-    let mut w: Vec<u32> = ids.iter().map(|&v| weld.to_welded()[v as usize]).collect();
-    w.sort_unstable();
-    w.dedup();
-    Ok(FixedVertices::Ids(w))
+    Ok(FixedVertices::Ids(weld.welded_ids(&ids)))
 }
 
 /// The weight vectors of every frame.

@@ -92,11 +92,7 @@ pub(super) fn report_jumps(
 
 /// Marks in `failed` (input layout) the input vertices of the welded vertices `welded`.
 pub(super) fn mark_failed(failed: &mut [bool], weld: &Weld, welded: &[u32]) {
-    let mut bad = vec![false; weld.num_welded()];
-    for &v in welded {
-        bad[v as usize] = true;
-    }
-    for (f, &w) in failed.iter_mut().zip(weld.to_welded()) {
-        *f |= bad[w as usize];
+    for v in weld.input_vertices(welded) {
+        failed[v as usize] = true;
     }
 }

@@ -188,11 +188,7 @@ fn weld_scene(scene: &mut Scene) -> anyhow::Result<Weld> {
     // Ids out of range stay out of range, for the solver's message.
     let map = |v: u32| weld.to_welded().get(v as usize).copied().unwrap_or(v);
     if let FixedVertices::Ids(ids) = &mut scene.blend.fixed {
-        for v in ids.iter_mut() {
-            *v = map(*v);
-        }
-        ids.sort_unstable();
-        ids.dedup();
+        *ids = weld.welded_ids(ids);
     }
     let pulls = std::mem::take(&mut scene.pulls);
     for p in pulls {

@@ -89,11 +89,7 @@ pub fn welded_markers(m: &Markers, source: &Weld, target: &Weld) -> anyhow::Resu
 
 /// A correspondence written for the input meshes, for the welded ones: vertex counts and
 /// markers mapped (one already welded, or of other counts, is left for `check` to judge).
-pub fn welded_correspondence(
-    mut c: Correspondence,
-    source: &Weld,
-    target: &Weld,
-) -> Correspondence {
+pub fn welded_correspondence(c: Correspondence, source: &Weld, target: &Weld) -> Correspondence {
     if (source.is_identity() && target.is_identity())
         || c.source_vertices != source.num_input()
         || c.target_vertices != target.num_input()
@@ -101,52 +97,22 @@ pub fn welded_correspondence(
     {
         return c;
     }
-    c.source_vertices = source.num_welded();
-    c.target_vertices = target.num_welded();
-    renumber(
-        &mut c,
-        |v| source.to_welded().get(v).copied(),
-        |v| target.to_welded().get(v).copied(),
-    );
-    c
+    c.renumbered(
+        Some((source.to_welded(), source.num_welded())),
+        Some((target.to_welded(), target.num_welded())),
+    )
 }
 
 /// A correspondence of the welded meshes, for the input ones: vertex counts and markers
 /// (each at its welded vertex's first input vertex).
-pub fn input_correspondence(mut c: Correspondence, source: &Weld, target: &Weld) -> Correspondence {
+pub fn input_correspondence(c: Correspondence, source: &Weld, target: &Weld) -> Correspondence {
     if (source.is_identity() && target.is_identity()) || c.identity {
         return c;
     }
-    c.source_vertices = source.num_input();
-    c.target_vertices = target.num_input();
-    renumber(
-        &mut c,
-        |v| source.representative().get(v).copied(),
-        |v| target.representative().get(v).copied(),
-    );
-    c
-}
-
-/// Renumbers the markers and marker residuals of `c`: source vertex `v` becomes `source(v)`,
-/// target vertex `v` becomes `target(v)` (unchanged where they give `None`).
-fn renumber(
-    c: &mut Correspondence,
-    source: impl Fn(usize) -> Option<u32>,
-    target: impl Fn(usize) -> Option<u32>,
-) {
-    let map = |f: &dyn Fn(usize) -> Option<u32>, v: &mut u32| {
-        if let Some(x) = f(*v as usize) {
-            *v = x;
-        }
-    };
-    for [s, t] in &mut c.markers {
-        map(&source, s);
-        map(&target, t);
-    }
-    for r in &mut c.marker_residuals {
-        map(&source, &mut r.source);
-        map(&target, &mut r.target);
-    }
+    c.renumbered(
+        Some((source.representative(), source.num_input())),
+        Some((target.representative(), target.num_input())),
+    )
 }
 
 /// [`CorrespondenceArgs::obtain`] on welded meshes: markers (input numbering) are mapped

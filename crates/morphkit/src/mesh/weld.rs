@@ -185,6 +185,33 @@ impl Weld {
         )
     }
 
+    /// Vertex ids of the input (fixed or pinned vertices) in welded numbering, sorted and
+    /// without repeats; an id out of the input's range is kept as it is, for the consumer's
+    /// own range check to name.
+    pub fn welded_ids(&self, ids: &[u32]) -> Vec<u32> {
+        let mut w: Vec<u32> = ids
+            .iter()
+            .map(|&v| self.to_welded.get(v as usize).copied().unwrap_or(v))
+            .collect();
+        w.sort_unstable();
+        w.dedup();
+        w
+    }
+
+    /// The input vertices of the welded vertices `welded` (say, those a solve did not
+    /// converge on), in increasing order.
+    pub fn input_vertices(&self, welded: &[u32]) -> Vec<u32> {
+        let mut mark = vec![false; self.num_welded()];
+        for &v in welded {
+            if let Some(m) = mark.get_mut(v as usize) {
+                *m = true;
+            }
+        }
+        (0..self.num_input() as u32)
+            .filter(|&v| mark[self.to_welded[v as usize] as usize])
+            .collect()
+    }
+
     /// `mesh`'s triangles in welded numbering; triangles that lose a corner to the weld (they
     /// had no area in any shape) are left out.
     pub fn triangles(&self, triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
@@ -276,6 +303,10 @@ mod tests {
         // Scatter puts every copy where its original is.
         let back = w.scatter(welded.positions(1));
         assert_eq!(back, shapes.positions(1));
+        // Ids map both ways: input 7 and its copy (appended first, at 42) are welded 7.
+        assert_eq!(w.to_welded()[42], 7);
+        assert_eq!(w.welded_ids(&[42, 7, 99]), [7, 99]);
+        assert_eq!(w.input_vertices(&[7]), [7, 42]);
     }
 
     #[test]

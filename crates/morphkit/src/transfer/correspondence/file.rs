@@ -58,6 +58,41 @@ pub struct Correspondence {
 }
 
 impl Correspondence {
+    /// The same correspondence between other vertex numberings of its meshes (triangles keep
+    /// their ids): `source`/`target` give `(map, count)`, vertex `v` becoming `map[v]` (kept
+    /// where `map` has no entry, for a later check to refuse) among `count` vertices; `None`
+    /// leaves that side as it is. Used to move a correspondence to and from welded meshes
+    /// ([`crate::mesh::Weld`]: `to_welded` and `representative` are such maps).
+    pub fn renumbered(
+        mut self,
+        source: Option<(&[u32], usize)>,
+        target: Option<(&[u32], usize)>,
+    ) -> Self {
+        if self.identity {
+            return self;
+        }
+        let remap = |map: &[u32], v: &mut u32| {
+            if let Some(&x) = map.get(*v as usize) {
+                *v = x;
+            }
+        };
+        if let Some((m, n)) = source {
+            self.source_vertices = n;
+            self.markers.iter_mut().for_each(|p| remap(m, &mut p[0]));
+            self.marker_residuals
+                .iter_mut()
+                .for_each(|r| remap(m, &mut r.source));
+        }
+        if let Some((m, n)) = target {
+            self.target_vertices = n;
+            self.markers.iter_mut().for_each(|p| remap(m, &mut p[1]));
+            self.marker_residuals
+                .iter_mut()
+                .for_each(|r| remap(m, &mut r.target));
+        }
+        self
+    }
+
     /// The identity correspondence of a mesh with itself.
     pub fn identity(mesh: &TriMesh) -> Self {
         let nf = mesh.num_triangles();
