@@ -5,6 +5,7 @@
 mod common;
 use common::split::*;
 use common::*;
+use std::path::Path;
 
 #[test]
 fn a_blend_of_an_artists_obj_keeps_every_record_and_updates_positions_and_normals() {
@@ -62,4 +63,89 @@ fn a_blend_of_an_artists_obj_keeps_every_record_and_updates_positions_and_normal
     assert_eq!(records(&plain_copy, not_v), records(&da, not_v));
     assert_eq!(read(&plain_copy).0, read(&da).0);
     let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Issue 37, as users make assets: Blender (headless) exports a flat-shaded rig with a UV map
+/// and a material as GLB, which splits every triangle into its own vertices. The blend of its
+/// frames welds them back: no seam opens, and the result is the unsplit blend's (to the
+/// exporter's `f32` rounding). Skipped without `blender`, unless MORPHKIT_REQUIRE_BLENDER is
+/// set (CI).
+#[test]
+fn a_blender_exported_flat_shaded_rig_blends_closed() {
+    let has_blender = std::process::Command::new("blender")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has_blender {
+        assert!(
+            std::env::var_os("MORPHKIT_REQUIRE_BLENDER").is_none(),
+            "MORPHKIT_REQUIRE_BLENDER is set but blender is not on the PATH"
+        );
+        eprintln!("SKIPPED: no blender on the PATH");
+        return;
+    }
+    let d = tmp_dir("assets-blender");
+    let (a, b) = (d.join("a.obj"), d.join("b.obj"));
+    write_tube(&a, 16, 10, 1.0, 0.0);
+    write_tube(&b, 16, 10, 1.0, 2.0);
+    let glb = d.join("rig.glb");
+    let script =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/blender-check/export_split_rig.py");
+    let run = std::process::Command::new("blender")
+        .args(["-b", "--factory-startup", "--python"])
+        .arg(&script)
+        .args(["--", s(&a), s(&b), s(&glb)])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success() && glb.exists(),
+        "blender export failed: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let frames = d.join("frames");
+    ok(&["convert", s(&glb), s(&frames)]);
+    let split = read(&frames.join("frame_0000.obj"));
+    let n = read(&a).0.len();
+    assert_eq!(
+        split.0.len(),
+        3 * split.1.len(),
+        "every triangle its own vertices"
+    );
+    let half = d.join("half.obj");
+    let (_, err) = run_ok(&blend_args(
+        &frames.join("frame_0000.obj"),
+        &frames.join("frame_0001.obj"),
+        &["--alpha", "0.5", "--out", s(&half)],
+    ));
+    assert!(
+        err.contains(&format!("welded {} split vertices", split.0.len() - n)),
+        "{err}"
+    );
+    let reference = d.join("reference.obj");
+    ok(&blend_args(
+        &a,
+        &b,
+        &["--alpha", "0.5", "--out", s(&reference)],
+    ));
+    let (got, want, rest) = (read(&half).0, read(&reference).0, read(&a).0);
+    let diag = diagonal(&rest);
+    for (p, q) in split.0.iter().zip(&got) {
+        // The unsplit vertex at this exported position.
+        let (v, dv) = rest
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (i, dist(*r, *p)))
+            .fold((0, f64::INFINITY), |m, x| if x.1 < m.1 { x } else { m });
+        assert!(dv < 1e-6 * diag, "exported vertex {p:?} is no input vertex");
+        let e = dist(*q, want[v]) / diag;
+        assert!(
+            e < 1e-6,
+            "vertex at {p:?}: {e} of the diagonal from the unsplit blend"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }

@@ -1,0 +1,47 @@
+"""Exports a rig the way an artist's Blender does (issue 37's test assets): two OBJ shapes of one
+connectivity become one mesh with a shape key, flat shaded (the glTF exporter then splits every
+triangle into its own three vertices), with a UV map and a material, written as GLB with its
+morph target.
+
+    blender -b --python export_split_rig.py -- BASE.obj TARGET.obj OUT.glb
+
+Positions keep Blender's axes (`export_yup=False`), so they compare with the OBJ inputs.
+"""
+import math
+import sys
+
+import bpy
+
+base_path, target_path, out = sys.argv[sys.argv.index("--") + 1:][:3]
+for o in list(bpy.data.objects):
+    bpy.data.objects.remove(o)
+
+
+def load(path):
+    if hasattr(bpy.ops.wm, "obj_import"):
+        bpy.ops.wm.obj_import(filepath=path)
+    else:
+        bpy.ops.import_scene.obj(filepath=path, split_mode="OFF")
+    return bpy.context.selected_objects[0]
+
+
+base = load(base_path)
+target = load(target_path)
+base.shape_key_add(name="Basis")
+key = base.shape_key_add(name="bend")
+for i, v in enumerate(target.data.vertices):
+    key.data[i].co = v.co
+bpy.data.objects.remove(target)
+mesh = base.data
+uv = mesh.uv_layers.new(name="UVMap")
+for poly in mesh.polygons:
+    poly.use_smooth = False
+    for li in poly.loop_indices:
+        co = mesh.vertices[mesh.loops[li].vertex_index].co
+        uv.data[li].uv = ((math.atan2(co.y, co.x) + math.pi) / (2 * math.pi), co.z)
+mesh.materials.append(bpy.data.materials.new("skin"))
+base.select_set(True)
+bpy.context.view_layer.objects.active = base
+bpy.ops.export_scene.gltf(
+    filepath=out, export_format="GLB", export_morph=True, use_selection=True, export_yup=False
+)
