@@ -1,9 +1,10 @@
 //! One thread's view of a [`PhysicalBlend`](super::PhysicalBlend) ([`FrameSolver`]), and the
 //! results of parallel frames with lost items reported.
 
-use super::blender::{Rig, Start};
 use super::newton::Workspace;
 use super::reference::Factor;
+use super::rig::Rig;
+use super::solve::Start;
 use super::terms::PointTarget;
 use super::{BlendError, BlendResult, Weights};
 
@@ -48,5 +49,27 @@ impl FrameSolver<'_> {
             _ => Factor::Fresh,
         };
         self.rig.solve(self.ws, &c, targets, from, factor)
+    }
+
+    /// The canonical start for `weights` (world positions, `#V`): the predictor plus the
+    /// sampled correction, computing the samples it needs.
+    #[doc(hidden)]
+    pub fn sampled_start(
+        &mut self,
+        weights: &Weights,
+    ) -> Result<Vec<crate::mesh::Point>, BlendError> {
+        let c = weights.coefficients(self.rig.shapes.len())?;
+        let p = self.rig.predicted(&c);
+        let d = self.rig.samples.correction(
+            &c,
+            &mut super::solve::Sampler {
+                rig: self.rig,
+                ws: self.ws,
+            },
+        );
+        Ok(match d {
+            Some(d) => super::sampled_start::shifted(p, &d, 1.0),
+            None => p,
+        })
     }
 }

@@ -13,7 +13,6 @@
 //!
 //! What passes both goes on to the exact analysis, which decides as before.
 
-use super::blender::PhysicalBlend;
 use super::options::BlendOptions;
 use super::sampled_start::StartSamples;
 use super::system::predicted_bytes_lower_bound;
@@ -27,8 +26,14 @@ pub const SAMPLED_ABOVE: usize = 400_000;
 pub const SAMPLE_VERTICES: usize = 100_000;
 
 /// Fails with [`BlendError::TooLarge`] when `shapes` is clearly over `o.max_memory_bytes`
-/// (see the module docs); `Ok` says only that the exact analysis must decide.
-pub(crate) fn check_early(shapes: &ShapeSet, o: &BlendOptions) -> Result<(), BlendError> {
+/// (see the module docs); `Ok` says only that the exact analysis must decide. `exact` is the
+/// symbolic analysis's estimate of a mesh (the rig's), run on the sampled part; it is passed
+/// in so that this check stays below the rig that calls it.
+pub(crate) fn check_early(
+    shapes: &ShapeSet,
+    o: &BlendOptions,
+    exact: fn(&ShapeSet, &BlendOptions) -> Result<u64, BlendError>,
+) -> Result<(), BlendError> {
     let n = shapes.num_vertices();
     let bound = predicted_bytes_lower_bound(n, shapes.triangles(), o.factor_precision)
         + StartSamples::bytes(n, shapes.len() - 1, o.sampled_start);
@@ -48,7 +53,7 @@ pub(crate) fn check_early(shapes: &ShapeSet, o: &BlendOptions) -> Result<(), Ble
         return Ok(());
     };
     let m = part.num_vertices();
-    let Ok(part_bytes) = PhysicalBlend::estimate_bytes(&part, o) else {
+    let Ok(part_bytes) = exact(&part, o) else {
         // The part may not solve on its own (say, all of it fixed): the exact analysis decides.
         return Ok(());
     };
@@ -164,12 +169,12 @@ mod tests {
         )
         .unwrap();
         let o = BlendOptions::default();
-        let exact = PhysicalBlend::estimate_bytes(&shapes, &o).unwrap();
+        let exact = super::super::rig::Rig::estimate_bytes(&shapes, &o).unwrap();
         let under = BlendOptions {
             max_memory_bytes: exact / 2,
             ..o.clone()
         };
-        match check_early(&shapes, &under) {
+        match check_early(&shapes, &under, super::super::rig::Rig::estimate_bytes) {
             Err(BlendError::TooLarge {
                 predicted_bytes,
                 basis: MemoryEstimate::Sampled { vertices },
@@ -185,6 +190,6 @@ mod tests {
             max_memory_bytes: exact + exact / 10,
             ..o
         };
-        assert!(check_early(&shapes, &over).is_ok());
+        assert!(check_early(&shapes, &over, super::super::rig::Rig::estimate_bytes).is_ok());
     }
 }

@@ -71,8 +71,17 @@
 //!   springs, anchors, pulls, contacts) writing into one block sparsity pattern;
 //! - [`Constraints`]: fixed, automatic and kinematic vertices and, where nothing is fixed, a
 //!   minimal gauge that removes only the rigid motions;
-//! - `predictor`, `system`, `newton`, `blender`: the predictor and output alignment, the
-//!   free-coordinate Newton system, the iterations, and [`PhysicalBlend`] / [`blend`];
+//! - the solver, a one-way stack (each layer uses only those below it):
+//!   1. data filled once or on first need, which solves nothing: `system` (the free-coordinate
+//!      Newton system), [`sampled_start`] (each target's correction fields),
+//!      [`reference`] (frozen factors near grid weights);
+//!   2. `newton` (the iterations on a [`terms`] energy) and `rig` (the prepared rig: terms,
+//!      constraints, symbolic analysis, memory check);
+//!   3. `predictor` (the rig's $P(w)$ and the output alignment);
+//!   4. `solve` (one frame: its start, its reference factor, its iteration; it also fills the
+//!      lazily computed sampled starts and references, which are solves themselves);
+//!   5. [`FrameSolver`] (one thread's view) and, on top, `blender`: [`PhysicalBlend`] /
+//!      [`blend`], set up once, then single, parallel and prepared solves;
 //! - [`metrics`]: edge-length, area, volume, fold and crease measures against
 //!   [`linear_blend`];
 //! - [`continuity`]: jumps between consecutive frames of a sequence ([`ContinuityCheck`]),
@@ -90,8 +99,10 @@ mod newton;
 mod options;
 mod predictor;
 pub mod reference;
+mod rig;
 mod rotation_predictor;
 pub mod sampled_start;
+mod solve;
 mod spring_set;
 mod steihaug;
 mod system;

@@ -16,8 +16,8 @@
 //! [`rotation_predictor`](super::rotation_predictor) and thin bands placed on it) is the
 //! `impl Rig` block at the end.
 
-use super::blender::Rig;
 use super::gauge::rotate_into;
+use super::rig::Rig;
 use super::{BlendError, Constraints, Weights};
 use crate::geom::kabsch;
 use crate::mesh::{Point, ShapeSet};

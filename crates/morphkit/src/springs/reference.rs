@@ -26,9 +26,6 @@
 //! Each reference depends on the rig and its grid weight alone, whichever frame or thread
 //! first asks for it, so every frame stays a deterministic function of its weights.
 
-use super::blender::{Rig, Start};
-use super::newton::Workspace;
-use super::sampled_start::Sampler;
 use super::system::FreeSystem;
 use crate::geom::polar_decomposition;
 use crate::sparse::{Cholesky, FrozenFactor};
@@ -166,46 +163,6 @@ pub(crate) enum Factor<'a> {
     Probe,
     /// Its own factorizations, and the reference at its equilibrium written here.
     Produce(&'a mut Option<Reference>),
-}
-
-impl Rig {
-    /// The reference nearest to coefficients `c` (see [`reference`](super::reference)),
-    /// computed on first need: the samples' from their sampled-start solves, the ends' from
-    /// a solve at the shape itself.
-    pub(super) fn reference(
-        &self,
-        ws: &mut Workspace,
-        c: &[f64],
-        probe: bool,
-    ) -> Option<Arc<Reference>> {
-        let (s, g) = References::nearest(c)?;
-        let cell = self.references.cell(s, g)?;
-        if probe && !self.references_fit(ws, s) {
-            return None;
-        }
-        if (1..=3).contains(&g) && self.options.sampled_start {
-            // The sample's solve sets the cell.
-            self.samples.field(s, g - 1, &mut Sampler { rig: self, ws });
-            return cell.get().cloned().flatten();
-        }
-        cell.get_or_init(|| {
-            let c = self.sample_coefficients(s, GRID[g]);
-            let mut out = None;
-            let r = self.solve(ws, &c, &[], Start::Plain, Factor::Produce(&mut out));
-            r.ok().and(out).map(Arc::new)
-        })
-        .clone()
-    }
-
-    /// The probe of target `s`: a solve at $a = ⅜$, ⅛ from the ½ reference, which passes
-    /// when it converges on the reference alone (no factorization of its own).
-    fn references_fit(&self, ws: &mut Workspace, s: usize) -> bool {
-        *self.references.fit[s - 1].get_or_init(|| {
-            let c = self.sample_coefficients(s, PROBE);
-            let r = self.solve(ws, &c, &[], Start::Canonical, Factor::Probe);
-            r.is_ok_and(|r| r.stats.converged && r.stats.factorizations == 0)
-        })
-    }
 }
 
 #[cfg(test)]

@@ -35,17 +35,12 @@
 //! [`BlendOptions::thin_band_rings`](super::BlendOptions::thin_band_rings); see
 //! docs/performance.md).
 
-use super::blender::{Rig, Start};
-use super::frame_solver::FrameSolver;
-use super::newton::Workspace;
-use super::reference::Factor;
-use super::{PhysicalBlend, Weights};
 use crate::mesh::Point;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock};
 
 /// Sample weights $a$ of each target's correction field.
-const SAMPLES: [f64; 3] = [0.25, 0.5, 0.75];
+pub(crate) const SAMPLES: [f64; 3] = [0.25, 0.5, 0.75];
 
 /// One correction field $d_s(a)$ (`None`: its solve did not converge).
 pub(crate) type Field = Option<Arc<Vec<Point>>>;
@@ -164,110 +159,18 @@ fn sample_weights(a: f64) -> Option<[f64; 3]> {
 }
 
 /// The start of the side samples: $4a(1-a)$, the weight of $d_s(½)$ at sample $a$.
-fn half_weight(a: f64) -> f64 {
+pub(crate) fn half_weight(a: f64) -> f64 {
     4.0 * a * (1.0 - a)
 }
 
 /// `p + w d`, pointwise.
-pub(super) fn shifted(mut p: Vec<Point>, d: &[Point], w: f64) -> Vec<Point> {
+pub(crate) fn shifted(mut p: Vec<Point>, d: &[Point], w: f64) -> Vec<Point> {
     for (p, d) in p.iter_mut().zip(d) {
         for k in 0..3 {
             p[k] += w * d[k];
         }
     }
     p
-}
-
-impl PhysicalBlend {
-    /// Computes the [sampled start](super::sampled_start)'s fields that solves for `weights`
-    /// will read, spread over up to `threads` threads (the ½ samples first, then the others,
-    /// which start from them). A solve computes what it lacks itself; this only lets the
-    /// samples run in parallel instead of one after another inside the first frames. Invalid
-    /// weights are skipped (their solves report them).
-    pub fn prepare(&mut self, weights: &[Weights], threads: usize) {
-        if !self.rig.options.sampled_start {
-            return;
-        }
-        let n = self.rig.shapes.len();
-        let samples = &self.rig.samples;
-        let mut missing: Vec<(usize, usize)> = weights
-            .iter()
-            .filter_map(|w| w.coefficients(n).ok())
-            .flat_map(|c| StartSamples::needed(&c).collect::<Vec<_>>())
-            .filter(|&(s, k)| !samples.is_computed(s, k))
-            .collect();
-        if missing.is_empty() {
-            return;
-        }
-        missing.sort_unstable();
-        missing.dedup();
-        let mut halves: Vec<(usize, usize)> = missing.iter().map(|&(s, _)| (s, 1)).collect();
-        halves.dedup();
-        let sides: Vec<(usize, usize)> = missing.into_iter().filter(|&(_, k)| k != 1).collect();
-        let field = |f: &mut FrameSolver<'_>, &(s, k): &(usize, usize)| {
-            let rig = f.rig;
-            rig.samples.field(s, k, &mut Sampler { rig, ws: f.ws });
-        };
-        self.map_frames(&halves, threads, field);
-        self.map_frames(&sides, threads, field);
-    }
-
-    /// Sample solves of the [sampled start](super::sampled_start) run so far (each target's
-    /// fields are solved once per blend, on first need).
-    pub fn start_samples_solved(&self) -> usize {
-        self.rig.samples.solved()
-    }
-}
-
-impl Rig {
-    /// The coefficients of sample `a` of target `s`: $(1-a)\,e_0 + a\,e_s$.
-    pub(super) fn sample_coefficients(&self, s: usize, a: f64) -> Vec<f64> {
-        let mut c = vec![0.0; self.shapes.len()];
-        c[0] = 1.0 - a;
-        c[s] = a;
-        c
-    }
-}
-
-/// Solves the sampled start's fields on one thread's workspace.
-pub(super) struct Sampler<'a> {
-    pub rig: &'a Rig,
-    pub ws: &'a mut Workspace,
-}
-
-impl SampleSolver for Sampler<'_> {
-    /// $d_s(a) = x^*_0(c^s(a)) - P(c^s(a))$: ½ solved from $P$, the others from
-    /// $P + 4a(1-a)\,d_s(½)$ (see [`sampled_start`](super::sampled_start)).
-    fn field(&mut self, s: usize, k: usize, half: Option<&[Point]>) -> Option<Vec<Point>> {
-        let a = SAMPLES[k];
-        let c = self.rig.sample_coefficients(s, a);
-        let p = self.rig.predicted(&c);
-        let mut reference = None;
-        let cell = self.rig.references.cell(s, k + 1);
-        let produce = match cell {
-            Some(_) => Factor::Produce(&mut reference),
-            None => Factor::Fresh,
-        };
-        let r = match half {
-            None => self.rig.solve(self.ws, &c, &[], Start::Plain, produce),
-            Some(d) => {
-                let from = shifted(p.clone(), d, half_weight(a));
-                self.rig
-                    .solve(self.ws, &c, &[], Start::From(&from), produce)
-            }
-        };
-        if let Some(cell) = cell {
-            let _ = cell.set(reference.map(Arc::new));
-        }
-        let r = r.ok()?;
-        r.stats.converged.then(|| {
-            r.positions
-                .iter()
-                .zip(&p)
-                .map(|(x, p)| std::array::from_fn(|k| x[k] - p[k]))
-                .collect()
-        })
-    }
 }
 
 #[cfg(test)]

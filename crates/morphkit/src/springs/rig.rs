@@ -1,0 +1,293 @@
+//! The prepared rig ([`Rig`]): everything a [`PhysicalBlend`](super::PhysicalBlend) builds
+//! once and every solve reads — springs and hinges, constraints, the free system and its
+//! symbolic analysis, the predictor's rotation data, and the lazily filled sampled-start
+//! fields and reference factors. It is the bottom of the solver's stack:
+//!
+//! `rig` → `predictor`, `newton` → `solve` (one frame) → `frame_solver` → `blender`
+//! (`PhysicalBlend`).
+//!
+//! Nothing here solves; the fields computed on first need (sampled starts, references) are
+//! filled by the solve layer above through [`super::sampled_start::SampleSolver`].
+
+use super::constraints::{stretched_vertices, thin_bands, Components, Constraints};
+use super::newton::Workspace;
+use super::options::{check_options, BlendOptions, LinearSolver, RigSummary};
+use super::reference::References;
+use super::rotation_predictor::RotationPredictor;
+use super::sampled_start::StartSamples;
+use super::system::{expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem};
+use super::terms::{BlockHessian, BlockPattern, EnergyTerm, HingeTerm, PointTarget, SpringTerm};
+use super::{BlendError, FillOrdering, MemoryEstimate, Predictor, SpringSet, StiffnessRule};
+use crate::mesh::{validate, ShapeSet, Topology};
+use crate::sparse::{AggregationLevels, AggregationPreconditioner, Ordering};
+use std::sync::Arc;
+
+/// Everything that does not change between solves (shared by all threads).
+pub(super) struct Rig {
+    pub(super) shapes: ShapeSet,
+    pub(super) terms: Vec<Box<dyn EnergyTerm>>,
+    pub(super) constraints: Constraints,
+    pub(super) system: FreeSystem,
+    pub(super) options: BlendOptions,
+    pub(super) tolerance: f64,
+    /// Mean structure-spring stiffness on the base (the unit of point-target stiffness).
+    pub(super) mean_stiffness: f64,
+    /// The rotation-aware predictor, when asked for and possible.
+    pub(super) rotation: Option<RotationPredictor>,
+    /// Per vertex: held at the linear blend by a boundary condition (not the bands).
+    pub(super) is_fixed: Vec<bool>,
+    /// Each target's correction fields of the sampled start.
+    pub(super) samples: StartSamples,
+    /// The aggregation cycle's pattern, when it preconditions instead of the factor.
+    pub(super) aggregation: Option<Arc<AggregationLevels>>,
+    /// Reference factors of frames near a grid weight of one target.
+    pub(super) references: References,
+    pub(super) summary: RigSummary,
+}
+
+/// What [`Rig::build`] made: the rig and a first numeric workspace, or only its memory
+/// estimate.
+pub(super) enum Built {
+    Rig(Box<(Rig, Workspace)>),
+    Estimate(u64),
+}
+
+impl Rig {
+    /// Builds springs, hinges, constraints, the Hessian pattern and its symbolic
+    /// factorization (or, with `estimate_only`, stops at the memory estimate).
+    pub(super) fn build(
+        shapes: &ShapeSet,
+        options: &BlendOptions,
+        extra: Vec<Box<dyn EnergyTerm>>,
+        estimate_only: bool,
+    ) -> Result<Built, BlendError> {
+        let o = options;
+        check_options(o)?;
+        // Triangles that use a vertex twice carry no energy: the solve leaves them out.
+        let proper;
+        let shapes = if shapes
+            .triangles()
+            .iter()
+            .any(|t| t[0] == t[1] || t[1] == t[2] || t[2] == t[0])
+        {
+            proper = crate::mesh::Weld::identity(shapes.num_vertices()).shapes(shapes)?;
+            &proper
+        } else {
+            shapes
+        };
+        if !estimate_only {
+            super::memory::check_early(shapes, o, Rig::estimate_bytes)?;
+        }
+        for s in 0..shapes.len() {
+            validate(&shapes.mesh(s))?;
+        }
+        super::spring_set::check_scale(shapes)?;
+        let n = shapes.num_vertices();
+        let topology = Topology::new(n, shapes.triangles());
+        let springs = SpringSet::new(shapes, &topology, &o.springs);
+        if springs.is_empty() {
+            return Err(BlendError::NoSprings {
+                cause: if o.springs.structure || o.springs.bending {
+                    "every spring joins vertices that coincide in all shapes"
+                } else {
+                    "both structure and bending springs are turned off"
+                },
+            });
+        }
+        springs.check_degenerate(shapes)?;
+        // μ of the hinges from the base's structure springs (weight-independent).
+        let (mean_stiffness, mean_square_length) = springs.base_means(o.springs.stiffness);
+        let tolerance = o.gradient_tolerance
+            * o.springs.k0
+            * match o.springs.stiffness {
+                StiffnessRule::InverseRestLength => 1.0,
+                StiffnessRule::Uniform => {
+                    let r = springs.rest_lengths(0);
+                    r.iter().sum::<f64>() / r.len() as f64
+                }
+            };
+        let hinges = HingeTerm::new(
+            shapes,
+            &topology,
+            &o.hinges,
+            mean_stiffness,
+            mean_square_length,
+        );
+        let mut summary = RigSummary {
+            vertices: n,
+            springs: springs.len(),
+            hinges: hinges.len(),
+            ..Default::default()
+        };
+        let mut terms: Vec<Box<dyn EnergyTerm>> =
+            vec![Box::new(SpringTerm::new(springs, o.min_rest_fraction))];
+        if !hinges.is_empty() {
+            terms.push(Box::new(hinges));
+        }
+        terms.extend(extra);
+
+        let mut pairs = Vec::new();
+        for t in &terms {
+            t.couplings(&mut pairs);
+        }
+        if let Some(&[a, b]) = pairs
+            .iter()
+            .find(|p| p[0] as usize >= n || p[1] as usize >= n)
+        {
+            return Err(BlendError::InvalidOption(format!(
+                "an energy term couples vertices {a} and {b}, but the mesh has {n} vertices"
+            )));
+        }
+        let block_pattern = Arc::new(BlockPattern::new(n, &pairs));
+        for t in &mut terms {
+            t.bind(&block_pattern);
+        }
+        let components = Components::from_pairs(n, pairs);
+        let kinematic = stretched_vertices(shapes, o.kinematic_stretch);
+        let bands = thin_bands(&topology, &components, o.thin_band_rings);
+        let constraints = Constraints::new(shapes, &components, &o.fixed, &kinematic, &bands)?;
+        summary.fixed_vertices =
+            constraints.fixed.len() - constraints.kinematic.len() - constraints.bands.len();
+        summary.kinematic_vertices = constraints.kinematic.len();
+        summary.band_vertices = constraints.bands.len();
+        summary.gauged_components = constraints.gauges.len() + constraints.aligned.len();
+        let vertex_order = match o.ordering {
+            FillOrdering::NestedDissection | FillOrdering::Cheapest => {
+                Some(vertex_nested_dissection(&block_pattern)?)
+            }
+            FillOrdering::Amd => None,
+        };
+        summary.predicted_bytes =
+            predicted_bytes(&block_pattern, vertex_order.as_deref(), o.factor_precision)?
+                + StartSamples::bytes(n, shapes.len() - 1, o.sampled_start);
+        if estimate_only {
+            return Ok(Built::Estimate(summary.predicted_bytes));
+        }
+        if summary.predicted_bytes > o.max_memory_bytes {
+            return Err(BlendError::TooLarge {
+                vertices: n,
+                predicted_bytes: summary.predicted_bytes,
+                limit_bytes: o.max_memory_bytes,
+                basis: MemoryEstimate::Symbolic,
+            });
+        }
+        let system = FreeSystem::new(block_pattern.clone(), &constraints.fixed_dof)?;
+        let rotation = match o.predictor {
+            Predictor::RotationAware => RotationPredictor::new(shapes, &components),
+            Predictor::Linear => None,
+        };
+        // Held at the linear blend (bands are held at the predictor, which places them).
+        let mut is_fixed = vec![false; n];
+        for &v in &constraints.fixed {
+            is_fixed[v as usize] = true;
+        }
+        for &v in &constraints.bands {
+            is_fixed[v as usize] = false;
+        }
+        let mut orderings = Vec::with_capacity(2);
+        if let Some(order) = &vertex_order {
+            orderings.push(Ordering::Custom(expand_vertex_order(
+                order,
+                &system.dof_index,
+            )));
+        }
+        if vertex_order.is_none() || o.ordering == FillOrdering::Cheapest {
+            orderings.push(Ordering::Amd);
+        }
+        let (chol, chosen) = system.analyze(&orderings, o.factor_precision)?;
+        summary.ordering = match orderings[chosen] {
+            Ordering::Amd => FillOrdering::Amd,
+            _ => FillOrdering::NestedDissection,
+        };
+        summary.free_dofs = system.num_free();
+        summary.factor_nnz = chol.factor_nnz();
+        summary.factor_flops = chol.factor_flops();
+        let nnz = system.pattern.nnz();
+        summary.hessian_entries = nnz;
+        let aggregation = if o.uses_aggregation(chol.factor_flops(), nnz) {
+            let levels = Arc::new(system.aggregation_levels()?);
+            summary.aggregates = levels.num_aggregates();
+            summary.coarse_flops = levels.coarse_flops();
+            Some(levels)
+        } else {
+            None
+        };
+        if aggregation.is_none() && o.linear_solver == LinearSolver::TrustRegion {
+            summary.reference_targets =
+                References::targets(&chol, shapes.len() - 1, o.reference_factor_bytes);
+        }
+        let mut ws = Workspace::new(chol, BlockHessian::zeros(block_pattern), nnz);
+        if let Some(levels) = &aggregation {
+            ws.aggregation = Some(AggregationPreconditioner::new(levels.clone())?);
+        }
+        Ok(Built::Rig(Box::new((
+            Rig {
+                shapes: shapes.clone(),
+                terms,
+                constraints,
+                system,
+                options: o.clone(),
+                tolerance,
+                mean_stiffness,
+                rotation,
+                is_fixed,
+                samples: StartSamples::new(shapes.len() - 1),
+                references: References::new(summary.reference_targets),
+                aggregation,
+                summary,
+            },
+            ws,
+        ))))
+    }
+
+    /// The symbolic analysis's memory estimate of a blend of `shapes` (bytes), without the
+    /// early checks and without building the solver.
+    pub(super) fn estimate_bytes(
+        shapes: &ShapeSet,
+        options: &BlendOptions,
+    ) -> Result<u64, BlendError> {
+        match Self::build(shapes, options, Vec::new(), true)? {
+            Built::Estimate(b) => Ok(b),
+            Built::Rig(_) => Err(BlendError::InvalidOption(
+                "internal: a blend where an estimate was asked for".into(),
+            )),
+        }
+    }
+
+    pub(super) fn check_targets(&self, targets: &[PointTarget]) -> Result<(), BlendError> {
+        let n = self.shapes.num_vertices();
+        for t in targets {
+            let v = t.vertex as usize;
+            if v >= n {
+                return Err(BlendError::TargetOutOfRange {
+                    vertex: t.vertex,
+                    num_vertices: n,
+                });
+            }
+            if !(t.stiffness.is_finite() && t.stiffness > 0.0)
+                || t.position.iter().any(|c| !c.is_finite())
+            {
+                return Err(BlendError::InvalidOption(format!(
+                    "the target of vertex {v} needs a finite position and a finite positive stiffness"
+                )));
+            }
+            let c = &self.constraints;
+            let free = c.gauges.iter().map(|g| &g.vertices);
+            if free
+                .chain(c.aligned.iter().map(|a| &a.vertices))
+                .any(|comp| comp.binary_search(&t.vertex).is_ok())
+            {
+                return Err(BlendError::TargetOnFreeComponent { vertex: t.vertex });
+            }
+        }
+        Ok(())
+    }
+
+    /// The coefficients of sample `a` of target `s`: $(1-a)\,e_0 + a\,e_s$.
+    pub(super) fn sample_coefficients(&self, s: usize, a: f64) -> Vec<f64> {
+        let mut c = vec![0.0; self.shapes.len()];
+        c[0] = 1.0 - a;
+        c[s] = a;
+        c
+    }
+}
