@@ -23,12 +23,14 @@ use std::time::Instant;
 /// Arguments of `morphkit bench`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  morphkit bench\n  morphkit bench --data ../shared/data --report bench.json\n  morphkit bench --suite springs --steps 36\n  morphkit bench --suite synth --data ../shared/data"
+    after_help = "Examples:\n  morphkit bench\n  morphkit bench --data ../shared/data --report bench.json\n  morphkit bench --suite springs --steps 36\n  morphkit bench --suite synth --data ../shared/data\n  morphkit bench --suite scrub --steps 12 --data ../shared/data"
 )]
 pub struct BenchArgs {
     /// Which suite to run: springs, transfer, rig (blendshape rig transfer), memory, synth,
-    /// scene (collisions), volume (internal springs: lattice, and tetgen when on the PATH), or
-    /// all (springs, transfer, rig, synth).
+    /// scene (collisions), volume (internal springs: lattice, and tetgen when on the PATH),
+    /// scrub (slider changes on the ICT and horse rigs: full solve and preview latency, the
+    /// preview's error; --steps random combinations, at most 24), or all (springs, transfer,
+    /// rig, synth).
     #[arg(long, default_value = "all")]
     suite: String,
     /// Directory of the real test meshes (defaults to $MORPHKIT_DATA when set).
@@ -301,10 +303,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     if !matches!(
         args.suite.as_str(),
-        "springs" | "transfer" | "rig" | "memory" | "synth" | "scene" | "volume" | "all"
+        "springs" | "transfer" | "rig" | "memory" | "synth" | "scene" | "volume" | "scrub" | "all"
     ) {
         anyhow::bail!(
-            "unknown suite '{}': use springs, transfer, rig, memory, synth, scene, volume or all",
+            "unknown suite '{}': use springs, transfer, rig, memory, synth, scene, volume, scrub or all",
             args.suite
         );
     }
@@ -372,6 +374,16 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             None => {
                 println!("synth suite skipped: it needs --data DIR or MORPHKIT_DATA (elephant)")
             }
+        }
+    }
+    if matches!(args.suite.as_str(), "scrub") {
+        match data.as_deref() {
+            Some(dir) => {
+                report["scrub"] = super::bench_scrub::run_scrub_bench(dir, args.steps.min(24))?
+            }
+            None => println!(
+                "scrub suite skipped: it needs --data DIR or MORPHKIT_DATA (ict-facekit, sumner-horse-camel)"
+            ),
         }
     }
     if let Some(path) = &args.report {

@@ -4,6 +4,7 @@ pub mod bench;
 pub mod bench_machine;
 pub mod bench_rig;
 pub mod bench_scene;
+pub mod bench_scrub;
 pub mod bench_synth;
 pub mod bench_transfer;
 pub mod bench_volume;
