@@ -1,9 +1,11 @@
 """Exports a rig the way an artist's Blender does (issue 37's test assets): two OBJ shapes of one
-connectivity become one mesh with a shape key, flat shaded (the glTF exporter then splits every
-triangle into its own three vertices), with a UV map and a material, written as GLB with its
-morph target.
+connectivity become one mesh with a shape key, a cylindrical UV map and a material, written as
+GLB with its morph target. Shading `flat` (the default) makes the glTF exporter split every
+triangle into its own three vertices; `smooth` keeps shared vertices except along the UV map's
+seam, where the map wraps from u = 1 back to 0 (the split an artist's smooth, unwrapped
+character gets).
 
-    blender -b --python export_split_rig.py -- BASE.obj TARGET.obj OUT.glb
+    blender -b --python export_split_rig.py -- BASE.obj TARGET.obj OUT.glb [flat|smooth]
 
 Positions keep Blender's axes (`export_yup=False`), so they compare with the OBJ inputs.
 """
@@ -12,7 +14,9 @@ import sys
 
 import bpy
 
-base_path, target_path, out = sys.argv[sys.argv.index("--") + 1:][:3]
+args = sys.argv[sys.argv.index("--") + 1:]
+base_path, target_path, out = args[:3]
+smooth = len(args) > 3 and args[3] == "smooth"
 for o in list(bpy.data.objects):
     bpy.data.objects.remove(o)
 
@@ -35,10 +39,18 @@ bpy.data.objects.remove(target)
 mesh = base.data
 uv = mesh.uv_layers.new(name="UVMap")
 for poly in mesh.polygons:
-    poly.use_smooth = False
+    poly.use_smooth = smooth
+    # Each face's angles are taken on the branch of its centre, so the faces on either side
+    # of the wrap give the vertices there u = 0 and u = 1: a UV seam.
+    centre = math.atan2(poly.center.y, poly.center.x)
     for li in poly.loop_indices:
         co = mesh.vertices[mesh.loops[li].vertex_index].co
-        uv.data[li].uv = ((math.atan2(co.y, co.x) + math.pi) / (2 * math.pi), co.z)
+        angle = math.atan2(co.y, co.x)
+        if angle - centre > math.pi:
+            angle -= 2 * math.pi
+        elif centre - angle > math.pi:
+            angle += 2 * math.pi
+        uv.data[li].uv = ((angle + math.pi) / (2 * math.pi), co.z)
 mesh.materials.append(bpy.data.materials.new("skin"))
 base.select_set(True)
 bpy.context.view_layer.objects.active = base

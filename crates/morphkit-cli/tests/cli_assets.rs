@@ -72,6 +72,17 @@ fn a_blend_of_an_artists_obj_keeps_every_record_and_updates_positions_and_normal
 /// set (CI).
 #[test]
 fn a_blender_exported_flat_shaded_rig_blends_closed() {
+    blender_exported_rig_blends_closed("flat");
+}
+
+/// The same with smooth shading: the exporter splits vertices only along the UV map's seam
+/// (one line of the tube), the common case of an unwrapped character.
+#[test]
+fn a_blender_exported_smooth_rig_with_a_uv_seam_blends_closed() {
+    blender_exported_rig_blends_closed("smooth");
+}
+
+fn blender_exported_rig_blends_closed(shading: &str) {
     let has_blender = std::process::Command::new("blender")
         .arg("--version")
         .output()
@@ -84,7 +95,7 @@ fn a_blender_exported_flat_shaded_rig_blends_closed() {
         eprintln!("SKIPPED: no blender on the PATH");
         return;
     }
-    let d = tmp_dir("assets-blender");
+    let d = tmp_dir(&format!("assets-blender-{shading}"));
     let (a, b) = (d.join("a.obj"), d.join("b.obj"));
     write_tube(&a, 16, 10, 1.0, 0.0);
     write_tube(&b, 16, 10, 1.0, 2.0);
@@ -94,7 +105,7 @@ fn a_blender_exported_flat_shaded_rig_blends_closed() {
     let run = std::process::Command::new("blender")
         .args(["-b", "--factory-startup", "--python"])
         .arg(&script)
-        .args(["--", s(&a), s(&b), s(&glb)])
+        .args(["--", s(&a), s(&b), s(&glb), shading])
         .output()
         .unwrap();
     assert!(
@@ -106,11 +117,20 @@ fn a_blender_exported_flat_shaded_rig_blends_closed() {
     ok(&["convert", s(&glb), s(&frames)]);
     let split = read(&frames.join("frame_0000.obj"));
     let n = read(&a).0.len();
-    assert_eq!(
-        split.0.len(),
-        3 * split.1.len(),
-        "every triangle its own vertices"
-    );
+    if shading == "flat" {
+        assert_eq!(
+            split.0.len(),
+            3 * split.1.len(),
+            "every triangle its own vertices"
+        );
+    } else {
+        // One seam line of the 16 × 10 tube: its 11 vertices (one column) doubled, no more.
+        assert!(
+            split.0.len() > n && split.0.len() <= n + 2 * 11,
+            "{} exported vertices for {n}: a seam split, not a flat one",
+            split.0.len()
+        );
+    }
     let half = d.join("half.obj");
     let (_, err) = run_ok(&blend_args(
         &frames.join("frame_0000.obj"),
