@@ -347,14 +347,14 @@ impl GltfAsset {
         if new == old {
             return;
         }
-        let pad_json = |w: &mut Value| {
-            if let Some(a) = w.as_array_mut() {
+        // Only where the document has weights (indexing a Value mutably would add nulls).
+        let nodes = self.mesh_nodes();
+        let pointers = std::iter::once(format!("/meshes/{}/weights", self.mesh))
+            .chain(nodes.iter().map(|n| format!("/nodes/{n}/weights")));
+        for pointer in pointers {
+            if let Some(a) = self.doc.pointer_mut(&pointer).and_then(Value::as_array_mut) {
                 a.resize(a.len() + new - old, json!(0.0));
             }
-        };
-        pad_json(&mut self.doc["meshes"][self.mesh]["weights"]);
-        for n in self.mesh_nodes() {
-            pad_json(&mut self.doc["nodes"][n]["weights"]);
         }
         // Padded outputs are rewritten as f32: keep what a reader will see.
         let f32_row = |w: &mut Vec<f64>| {
