@@ -59,7 +59,9 @@ pub use usd::{
     read_usd_animation, write_usd_animation, write_usd_blendshapes, UpAxis, UsdAnimation,
     UsdOptions,
 };
-pub use weights::{parse_weights, read_weights, WeightRow};
+pub use weights::{
+    parse_named_weights, parse_weights, read_named_weights, read_weights, WeightRow,
+};
 
 use crate::mesh::{validate, TriMesh, ValidationReport};
 use std::path::Path;
