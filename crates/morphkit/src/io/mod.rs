@@ -5,7 +5,7 @@
 //! | OBJ | [`obj`] | [`obj`] | `v`/`f` only, polygons kept, full `f64` precision; `.obj.gz` both ways |
 //! | PLY | [`ply`] | [`ply`] | ascii and binary; written binary little endian, optionally coloured |
 //! | OFF | [`off`] | [`off`] | |
-//! | glTF / GLB | [`gltf`] | [`gltf`] | the mesh with morph targets (or the first; choose by name with [`GltfReadOptions`]); quantized, meshopt and sparse accessors; morph-weight animations |
+//! | glTF / GLB | [`gltf`] | [`gltf`] | the mesh with morph targets (or the first; choose by name with [`GltfReadOptions`]); quantized, meshopt and sparse accessors; morph-weight animations; a user's whole asset edited in place with [`GltfAsset`] |
 //! | PC2 | [`pc2`] | [`pc2`] | positions only; connectivity from a reference mesh |
 //! | USD (`.usda`) | [`usd`] (minimal) | [`usd`] | time-sampled `points`; `UsdSkel` blend shapes |
 //! | weights | [`weights`] | | per-frame blend weights, JSON or CSV |

@@ -422,3 +422,90 @@ fn meshopt_buffers_are_renumbered_and_fallbacks_kept() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn targets_on_a_mesh_without_any_add_no_weights_members() {
+    let d = tmp("plain");
+    let p = d.join("a.glb");
+    let mut spec = fixture::standard(false, 1.0);
+    spec.prims.iter_mut().for_each(|q| q.targets.clear());
+    spec.target_names.clear();
+    spec.keys.clear();
+    spec.cubic = false;
+    fixture::write(&p, &spec);
+    let opts = GltfReadOptions {
+        mesh: Some("Body".into()),
+    };
+    let mut a = GltfAsset::read(&p, &opts).unwrap();
+    let up: Vec<Point> = a
+        .morphs()
+        .base
+        .positions
+        .iter()
+        .map(|q| [q[0], q[1], q[2] + 0.5])
+        .collect();
+    a.add_targets(&["up".into()], std::slice::from_ref(&up))
+        .unwrap();
+    let out = d.join("b.glb");
+    a.write(&out, &GltfAssetOptions::default()).unwrap();
+    let doc = fixture::json_of(&out);
+    // glTF's default weights are zeros: nothing to pad, and no `null` added.
+    assert!(doc["meshes"][1].get("weights").is_none());
+    assert!(doc["nodes"][2].get("weights").is_none());
+    assert_eq!(
+        doc["meshes"][1]["extras"]["targetNames"],
+        serde_json::json!(["up"])
+    );
+    assert_eq!(doc["meshes"][1]["extras"]["rigger"], "fixture");
+    let m = super::read_gltf_morphs_with(&out, &opts).unwrap();
+    assert!(close(&m.targets[0], &up, 1e-6));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn a_split_rig_is_carried_but_not_edited() {
+    let d = tmp("split");
+    let p = d.join("a.glb");
+    let base = crate::mesh::generate::grid(4, 3, 1.0, 1.0);
+    let n = 5;
+    let targets: Vec<Vec<Point>> = (0..n)
+        .map(|k| {
+            base.positions
+                .iter()
+                .map(|q| [q[0], q[1], q[2] + k as f64])
+                .collect()
+        })
+        .collect();
+    let rig = super::GltfMorphs {
+        target_names: (0..n).map(|k| format!("t{k}")).collect(),
+        weight_keys: (0..n)
+            .map(|k| {
+                (
+                    k as f64,
+                    (0..n).map(|t| if t == k { 1.0 } else { 0.0 }).collect(),
+                )
+            })
+            .collect(),
+        base,
+        targets,
+    };
+    let opts = super::GltfOptions {
+        max_targets: 2,
+        ..Default::default()
+    };
+    assert!(super::write_gltf_with(&p, &rig, &opts).unwrap().meshes > 1);
+    let mut a = read(&p);
+    assert!(a.is_split_rig());
+    let out = d.join("b.glb");
+    a.write(&out, &GltfAssetOptions::default()).unwrap();
+    assert_eq!(
+        read_gltf_morphs(&out).unwrap(),
+        read_gltf_morphs(&p).unwrap()
+    );
+    let e = a
+        .add_targets(&["x".into()], &[rig.base.positions.clone()])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("split into several meshes"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
