@@ -265,8 +265,20 @@ impl GltfAsset {
             split,
             morphs,
         } = loaded;
-        let doc: Value = serde_json::from_slice(&json)
+        let mut doc: Value = serde_json::from_slice(&json)
             .map_err(|e| IoError::content(path, format!("the JSON does not parse: {e}")))?;
+        drop(json);
+        // Buffers in data URIs are held decoded; the text is not needed twice.
+        if let Some(bs) = doc.get_mut("buffers").and_then(Value::as_array_mut) {
+            for b in bs {
+                if b.get("uri")
+                    .and_then(Value::as_str)
+                    .is_some_and(|u| u.starts_with("data:"))
+                {
+                    b.as_object_mut().map(|o| o.remove("uri"));
+                }
+            }
+        }
         let images = load_images(path, &doc)?;
         let (mut v, mut t) = (0, 0);
         let primitives = primitives
@@ -313,8 +325,8 @@ impl GltfAsset {
         &self.path
     }
 
-    /// The document's JSON as it will be written (before buffers are merged and images
-    /// embedded).
+    /// The document's JSON as it will be written, before buffers are merged and images
+    /// embedded (buffers read from data URIs are listed without their `uri`).
     pub fn document(&self) -> &Value {
         &self.doc
     }

@@ -503,7 +503,7 @@ fn a_split_rig_is_carried_but_not_edited() {
         read_gltf_morphs(&p).unwrap()
     );
     let e = a
-        .add_targets(&["x".into()], &[rig.base.positions.clone()])
+        .add_targets(&["x".into()], std::slice::from_ref(&rig.base.positions))
         .unwrap_err()
         .to_string();
     assert!(e.contains("split into several meshes"), "{e}");

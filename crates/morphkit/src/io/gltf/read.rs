@@ -192,12 +192,15 @@ pub(super) fn load_with<T>(
     super::precheck::check_positions(path, super::super::strip_bom(&bytes))?;
     let (json, blob): (Vec<u8>, Option<Vec<u8>>) = if is_glb {
         let glb = ::gltf::Glb::from_slice(&bytes).map_err(gerr)?;
+        // The file's bytes are no longer needed once the JSON and the BIN chunk are copied.
         (glb.json.into_owned(), glb.bin.map(Cow::into_owned))
     } else {
-        (super::super::strip_bom(&bytes).to_vec(), None)
+        // The text is the JSON: no copy, only the byte-order mark removed.
+        let mut bytes = bytes;
+        let bom = bytes.len() - super::super::strip_bom(&bytes).len();
+        bytes.drain(..bom);
+        (bytes, None)
     };
-    // The file's bytes are no longer needed: the JSON and the BIN chunk were copied.
-    drop(bytes);
     let stripped = extensions::strip_required(path, &json)?;
     let gltf = ::gltf::Gltf::from_slice_without_validation(stripped.as_deref().unwrap_or(&json))
         .map_err(gerr)?;
