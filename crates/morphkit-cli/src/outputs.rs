@@ -28,7 +28,8 @@ pub struct OutputFlags {
     /// Most morph targets per mesh in a .glb/.gltf animation (default 200, what WebGL2 viewers
     /// such as three.js play). A longer animation is split into meshes of at most N targets,
     /// shown in turn by node scale; 0 never splits (a warning says when viewers will not play
-    /// it).
+    /// it). In a user's asset (`blend --rig`, `rig --target X.glb`) a mesh is never split: more
+    /// targets than N is an error, and 0 allows any number.
     #[arg(long, global = true, value_name = "N")]
     pub max_targets: Option<usize>,
     /// Leave vertex normals and normal deltas out of .glb/.gltf output (smaller, shades flat).
@@ -59,6 +60,15 @@ pub fn set_context(flags: OutputFlags, subcommand: &str) {
 
 fn context() -> Context {
     CONTEXT.get().cloned().unwrap_or_default()
+}
+
+/// The most morph targets an edited asset's mesh may have: `--max-targets`, else
+/// [`io::SAFE_MORPH_TARGETS`]; 0 allows any number.
+pub fn asset_max_targets() -> usize {
+    context()
+        .flags
+        .max_targets
+        .unwrap_or(io::SAFE_MORPH_TARGETS)
 }
 
 /// The stem of a path without mesh extensions (`horse-07.obj.gz` → `horse-07`).
@@ -251,6 +261,30 @@ impl Outputs {
         })?;
         report_gltf(path, &summary, opts);
         Ok(())
+    }
+
+    /// Stages a user's glTF asset ([`io::GltfAsset`]) as one file, with the run's command line,
+    /// sources and frame count in `asset.extras.morphkit` ([`frames_options`]).
+    pub fn gltf_asset(
+        &mut self,
+        path: &Path,
+        asset: &io::GltfAsset,
+        inputs: &[PathBuf],
+        frames: usize,
+    ) -> anyhow::Result<()> {
+        let opts = frames_options(
+            &FramesOptions {
+                inputs: inputs.to_vec(),
+                ..FramesOptions::default()
+            },
+            frames,
+        );
+        let opts = io::GltfAssetOptions {
+            extras: opts.gltf.extras,
+        };
+        Ok(self
+            .staging
+            .write(path, false, |tmp| asset.write(tmp, &opts))?)
     }
 
     /// Stages a rig as `UsdSkel` blend shapes named after its targets, with the run's names and

@@ -134,10 +134,12 @@ fn convert_sequences_to_animations_and_back() {
             .len(),
         4
     );
-    assert_eq!(
-        doc["nodes"][0]["name"], "a",
-        "named after the input, not morphkit"
-    );
+    // The asset comes back whole (issue 37): its names are the input's.
+    let glb = std::fs::read(d.join("a.glb")).unwrap();
+    let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let src: serde_json::Value = serde_json::from_slice(&glb[20..20 + len]).unwrap();
+    assert_eq!(doc["nodes"], src["nodes"], "the input's nodes, names kept");
+    assert_eq!(doc["meshes"], src["meshes"]);
     assert_eq!(
         doc["animations"][0]["channels"][0]["target"]["path"],
         "weights"

@@ -47,6 +47,8 @@ pub fn run_rig_bench(data_dir: &Path) -> anyhow::Result<Value> {
         source_neutral: Some(neutral_path.clone()),
         source_shapes: vec![format!("{}/[a-fh-z]*.obj.gz", ict.display())],
         target: head_path.clone(),
+        mesh: None,
+        source_mesh: None,
         corr: super::corr_args::CorrespondenceArgs {
             markers: Some(markers_path.clone()),
             correspondence: None,

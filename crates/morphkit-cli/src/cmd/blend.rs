@@ -8,6 +8,10 @@
 //! - `--frames N`: `N` frames with α from 0 to 1 (`αₖ = k / (N − 1)`), one target only;
 //! - `--weights-file F`: one weight vector per frame, JSON (`{"frames": [[…], …]}` or a bare
 //!   array of arrays) or CSV (one row per frame; `#` comments and a non-numeric header skipped).
+//!
+//! With `--rig FILE.glb` instead of `--base`/`--target`, the file's mesh, morph targets and
+//! weights animation (or `--weights-file`, its header naming targets) are the inputs, and a
+//! .glb/.gltf output is that asset with the physical animation added (`blend_rig.rs`).
 
 use crate::outputs::{is_frame_dir, Kind, Plan};
 use crate::util::{check_fps, check_positive, progress};
@@ -38,6 +42,8 @@ Examples:
   morphkit blend --base rest.obj --target bend.obj --weights-file keys.csv --fixed pinned.json --out anim.pc2
   morphkit blend --base rest.obj --target bend.obj --frames 36 --linear --out linear.glb
   morphkit blend --scene examples/bend-around-cylinder/scene.toml --out wrap.glb --report wrap.json
+  morphkit blend --rig character.glb --animation Talk --out character-physical.glb
+  morphkit blend --rig character.glb --mesh Face --weights-file keys.csv --out physical.glb
 
 OUT: a directory (no extension) gets frame_0000.obj, …; .glb/.gltf gets an animation (frame k
 at k/fps seconds; more than --max-targets frames are split into meshes shown in turn); .pc2 a
@@ -49,7 +55,14 @@ component keeps only its rigid motion free and is aligned to the linear blend.
 Each frame is the canonical equilibrium of its weights, solved from the linear blend: frames
 do not depend on each other, so --threads, frame order and repeated runs give the same bytes.
 A frame that does not converge is reported on stderr and in --report, and its failing
-vertices are written, coloured red, to OUT-unconverged.ply beside the output.";
+vertices are written, coloured red, to OUT-unconverged.ply beside the output.
+
+--rig FILE.glb blends a user's asset: its mesh (--mesh NAME when several have morph targets),
+named morph targets and weights animation (--animation NAME when several; or --weights-file,
+whose CSV header row names targets) drive the blend, and a .glb/.gltf OUT is the same asset
+(materials, textures, skins, other meshes, transforms, animations kept) with one more
+animation, NAME-physical, keying one new morph target per frame at the keys' times. More frames
+than --max-targets (default 200, what WebGL2 viewers play) is refused before any solve.";
 
 /// Most frames one call produces.
 pub(super) const MAX_FRAMES: usize = 100_000;
@@ -64,13 +77,29 @@ pub(super) const FRAME_CHUNK: usize = 256;
 pub struct BlendArgs {
     /// A TOML scene (base, targets, weights, obstacles, pulls; see `morphkit::scene::Scene`)
     /// instead of --base/--target and the weight flags: the blend collides with the obstacles.
-    #[arg(long, conflicts_with_all = ["base", "targets", "w"])]
+    #[arg(long, conflicts_with_all = ["base", "targets", "w", "rig"])]
     pub scene: Option<PathBuf>,
+    /// A .glb/.gltf asset instead of --base/--target: its mesh, morph targets and weights
+    /// animation drive the blend; a .glb/.gltf --out is that asset with the physical animation
+    /// added.
+    #[arg(long, value_name = "GLB", conflicts_with_all = ["base", "targets", "alpha", "weights", "frames", "convex"])]
+    pub rig: Option<PathBuf>,
+    /// The weights animation of --rig to blend, by name (needed when several drive the mesh).
+    #[arg(
+        long,
+        value_name = "NAME",
+        requires = "rig",
+        conflicts_with = "weights_file"
+    )]
+    pub animation: Option<String>,
+    /// The mesh of --rig, by name (needed when several meshes have morph targets).
+    #[arg(long, value_name = "NAME", requires = "rig")]
+    pub mesh: Option<String>,
     /// The base shape (shape 0).
-    #[arg(long, required_unless_present = "scene")]
+    #[arg(long, required_unless_present_any = ["scene", "rig"])]
     pub base: Option<PathBuf>,
     /// A target shape; repeat for several. All must share the base's connectivity.
-    #[arg(long = "target", required_unless_present = "scene")]
+    #[arg(long = "target", required_unless_present_any = ["scene", "rig"])]
     pub targets: Vec<PathBuf>,
     /// Blend factor between the base and a single target.
     #[arg(long, group = "w")]
@@ -222,10 +251,11 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         return super::scene::run(scene, &a.out, a.report.as_deref(), threads(a));
     }
     let start = Instant::now();
-    let Some(base) = &a.base else {
-        bail!("give --base and --target, or --scene");
+    let mut inputs = match (&a.rig, &a.base) {
+        (Some(rig), _) => vec![rig.clone()],
+        (None, Some(base)) => vec![base.clone()],
+        _ => bail!("give --base and --target, --rig, or --scene"),
     };
-    let mut inputs = vec![base.clone()];
     inputs.extend(a.targets.iter().cloned());
     let mut protected = inputs.clone();
     protected.extend(a.weights_file.iter().cloned());
@@ -243,12 +273,21 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         .output_sometimes("OUT-jumps.ply", &jumps_path(&a.out), Kind::Mesh)
         .check()?;
     crate::util::announce_reading(&inputs);
-    let shapes = io::read_shape_set(&inputs)?;
+    let (rig, shapes) = match &a.rig {
+        Some(r) => {
+            let (rig, shapes) = super::blend_rig::read(a, r)?;
+            (Some(rig), shapes)
+        }
+        None => (None, io::read_shape_set(&inputs)?),
+    };
     crate::util::warn_carried(&inputs[0], shapes.base());
     // An OBJ base comes back as the artist's own file: texture coordinates, normals' hard
     // edges, materials and groups kept (io::ObjTemplate).
     let template = crate::util::obj_template(&inputs[0], shapes.num_vertices())?;
-    let weights = frame_weights(a, shapes.len())?;
+    let weights = match &rig {
+        Some(r) => r.weights.clone(),
+        None => frame_weights(a, shapes.len())?,
+    };
     for (k, w) in weights.iter().enumerate() {
         w.coefficients(shapes.len())
             .with_context(|| format!("frame {k}: invalid weights"))?;
@@ -308,6 +347,11 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         ..Default::default()
     };
     let threads = threads(a);
+    // A .glb/.gltf output of --rig is the rig's asset with the physical animation added.
+    let carry = rig.is_some() && super::blend_rig::carries(&a.out) && !single_mesh;
+    if carry && super::volume::requested(a) {
+        bail!("--rig with --interior writes frames, not the asset: give a directory or .pc2 --out");
+    }
     if super::volume::requested(a) {
         return super::volume::run(
             a,
@@ -426,6 +470,8 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let t_write = Instant::now();
     if let Some(s) = stream {
         s.finish()?;
+    } else if let Some(r) = rig.filter(|_| carry) {
+        super::blend_rig::write(&mut outputs, &a.out, r, frames, &inputs)?;
     } else {
         let out_set = ShapeSet::new(shapes.base().clone(), frames)?;
         if single_mesh {

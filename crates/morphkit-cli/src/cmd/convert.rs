@@ -4,7 +4,7 @@
 use crate::outputs::{Kind, Outputs, Plan};
 use crate::util::{check_fps, progress};
 use anyhow::{bail, Context};
-use morphkit::io::{self, Format, FramesOptions};
+use morphkit::io::{self, Format, FramesOptions, GltfReadOptions};
 use morphkit::{ShapeSet, TriMesh};
 use std::path::{Path, PathBuf};
 
@@ -16,7 +16,8 @@ Examples:
   morphkit convert a.obj b.obj c.obj anim.pc2              # several files to a point cache
   morphkit convert cat-run.glb frames/                     # an animation back to frames/frame_0000.obj, …
   morphkit convert anim.pc2 --reference rest.obj frames/   # PC2 needs the mesh for its connectivity
-  morphkit convert face-rig.glb face-copy.gltf             # a morph-target rig keeps its targets and names
+  morphkit convert face-rig.glb face-copy.gltf             # the whole asset: materials, textures, skins, nodes kept
+  morphkit convert scene.glb --mesh Face face.usda         # choose the mesh when several have morph targets
   morphkit convert cat-run.glb --frame 12 pose12.obj       # one frame of an animation
   morphkit convert 'cat-run/*.obj.gz' cat-run.usda         # a USD Mesh with time-sampled points
   morphkit convert face-rig.glb face-rig.usda              # a rig (no animation): UsdSkel blend shapes
@@ -29,7 +30,9 @@ second clip: 9 frames last 0.33 s, and viewers loop it. A .glb/.gltf animation o
 --max-targets frames (default 200, what WebGL2 viewers such as three.js hold per mesh) is split
 into meshes shown in turn, with a warning. A single-mesh output
 (.obj, .ply, .off) of an animation needs --frame N. Outputs are written atomically and never
-overwrite an input.";
+overwrite an input. A .glb/.gltf converted to .glb/.gltf is the same asset in one file: every
+buffer merged, external images embedded, everything else (materials, textures, skins, other
+meshes, node transforms, names, extras, animations) kept as it was.";
 
 /// Arguments of `morphkit convert`.
 #[derive(clap::Args, Debug)]
@@ -51,6 +54,9 @@ pub struct ConvertArgs {
     /// Replace the frame_*.obj files of an existing output directory.
     #[arg(long)]
     pub force: bool,
+    /// The mesh of a .glb/.gltf input to read, by name, when several have morph targets.
+    #[arg(long, value_name = "NAME")]
+    pub mesh: Option<String>,
 }
 
 /// Input arguments after expansion (see [`expand`]).
@@ -195,6 +201,9 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         inputs: protected.clone(),
         ..FramesOptions::default()
     };
+    if sequence && args.mesh.is_some() {
+        bail!("--mesh chooses the mesh of one .glb/.gltf input, not of a sequence");
+    }
     if sequence {
         let frames = read_sequence(&inputs)?;
         return match args.frame {
@@ -206,8 +215,25 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
     let in_fmt = Format::from_path(input);
     let in_gltf = matches!(in_fmt, Some(Format::Glb | Format::Gltf));
     let in_anim = in_gltf || matches!(in_fmt, Some(Format::Pc2 | Format::Usda));
+    if args.mesh.is_some() && !in_gltf {
+        bail!(
+            "--mesh chooses a mesh of a .glb/.gltf input; {} is not one",
+            input.display()
+        );
+    }
+    let gltf_opts = GltfReadOptions {
+        mesh: args.mesh.clone(),
+    };
+    // A glTF input's frames, from the chosen mesh.
+    let read_animation = |input: &Path| -> anyhow::Result<ShapeSet> {
+        Ok(if in_gltf {
+            io::gltf_to_frames(input, &io::read_gltf_morphs_with(input, &gltf_opts)?)?
+        } else {
+            io::read_animation(input, args.reference.as_deref())?
+        })
+    };
     if in_gltf && out_fmt == Some(Format::Usda) {
-        let rig = io::read_gltf_morphs(input)?;
+        let rig = io::read_gltf_morphs_with(input, &gltf_opts)?;
         if rig.weight_keys.is_empty() && !rig.targets.is_empty() {
             // A rig without an animation: UsdSkel blend shapes with the target names.
             let mut outputs = outputs;
@@ -223,31 +249,39 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         }
     }
     if frames_out {
-        let frames = io::read_animation(input, args.reference.as_deref())?;
+        let frames = read_animation(input)?;
         return write_frames(outputs, &out, &frames, &opts);
     }
     if in_gltf && out_gltf && args.frame.is_none() {
-        let rig = io::read_gltf_morphs(input)?;
+        // The user's asset, carried whole (io::GltfAsset).
+        let asset = io::GltfAsset::read(input, &gltf_opts)?;
+        let rig = asset.morphs();
         morphkit::mesh::validate(&rig.base)
             .map_err(|e| anyhow::anyhow!("{}: {e}", input.display()))?;
         let mut outputs = outputs;
-        outputs.gltf_from(&out, &rig, &protected)?;
+        outputs.gltf_asset(&out, &asset, &protected, rig.weight_keys.len())?;
         outputs.commit()?;
+        let doc = asset.document();
+        let count = |k: &str| doc[k].as_array().map_or(0, Vec::len);
         eprintln!(
-            "wrote {}: {} vertices, {} morph targets, {} animation keys",
+            "wrote {}: the asset whole ({} meshes, {} nodes, {} materials, {} animations); mesh {}: {} vertices, {} morph targets",
             out.display(),
+            count("meshes"),
+            count("nodes"),
+            count("materials"),
+            count("animations"),
+            asset.mesh_name().map_or_else(|| asset.mesh_index().to_string(), |n| format!("'{n}'")),
             rig.base.num_vertices(),
             rig.targets.len(),
-            rig.weight_keys.len()
         );
         return Ok(());
     }
     if in_anim && out_gltf && args.frame.is_none() {
-        let frames = io::read_animation(input, args.reference.as_deref())?;
+        let frames = read_animation(input)?;
         return write_frames(outputs, &out, &frames, &opts);
     }
     if in_anim || args.frame.is_some() {
-        let frames = io::read_animation(input, args.reference.as_deref())?;
+        let frames = read_animation(input)?;
         let k = match args.frame {
             Some(k) => k,
             None if frames.len() == 1 => 0,

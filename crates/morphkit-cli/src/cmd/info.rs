@@ -11,7 +11,8 @@ const EXAMPLES: &str = "\
 Examples:
   morphkit info horse-reference.obj.gz
   morphkit info cat-run/*.obj.gz            # also says whether all share one connectivity
-  morphkit info --json face.glb neutral.obj > info.json";
+  morphkit info --json face.glb neutral.obj > info.json
+  morphkit info --mesh Face character.glb   # the mesh named Face, when several have morph targets";
 
 /// Arguments of `morphkit info`.
 #[derive(clap::Args, Debug)]
@@ -23,6 +24,9 @@ pub struct InfoArgs {
     /// Print machine-readable JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// The mesh of .glb/.gltf files to describe, by name, when several have morph targets.
+    #[arg(long, value_name = "NAME")]
+    pub mesh: Option<String>,
 }
 
 /// What `info` reports about one file.
@@ -66,7 +70,10 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
     let mut first: Option<TriMesh> = None;
     let mut shared = true;
     for path in &args.files {
-        let (mesh, report) = morphkit::io::read_mesh_with_report(path)?;
+        let gltf = morphkit::io::GltfReadOptions {
+            mesh: args.mesh.clone(),
+        };
+        let (mesh, report) = morphkit::io::read_mesh_with(path, &gltf)?;
         let warnings: Vec<String> = report.warnings.iter().map(|w| w.to_string()).collect();
         reports.push(describe(path, &mesh, &warnings));
         match &first {

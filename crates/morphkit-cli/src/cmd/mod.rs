@@ -11,6 +11,7 @@ pub mod bench_volume;
 pub mod blend;
 pub mod blend_inputs;
 pub mod blend_outputs;
+pub mod blend_rig;
 pub mod convert;
 pub mod corr_args;
 pub mod correspond;

@@ -6,7 +6,7 @@ use super::corr_args::CorrespondenceArgs;
 use super::weld_util;
 use crate::outputs::{Kind, Plan};
 use anyhow::{bail, Context};
-use morphkit::io::{self, Format, GltfMorphs};
+use morphkit::io::{self, Format, GltfAsset, GltfMorphs, GltfReadOptions};
 use morphkit::transfer::{RigOptions, RigTransfer};
 use morphkit::{ShapeSet, TriMesh};
 use serde_json::json;
@@ -19,12 +19,16 @@ Examples:
       --markers markers.json --out head-rig.glb
   morphkit rig --source-shapes face-rig.glb --target head.obj --correspondence corr.json \\
       --out head-rig.glb --shapes-dir head-shapes --report rig.json
+  morphkit rig --source-shapes face-rig.glb --target character.glb --mesh Head \\
+      --markers markers.json --out character-rig.glb
 
 One morph target per source shape, in the order given (a glob expands sorted by name), named by
 the file stem (jawOpen.obj.gz → jawOpen) or the source GLB's target names. Deltas are relative to
 the target mesh as given (its neutral). The neutral stays where it is (no root motion); a
 target posed differently from the source (rotated, scaled) gets the expressions rotated and
-scaled alike.";
+scaled alike. A .glb/.gltf target comes back whole (materials, textures, skins, other meshes,
+node transforms kept) with the shapes added as morph targets of its mesh (--mesh NAME when
+several meshes have morph targets); a shape named as an existing target replaces it.";
 
 /// Arguments of `morphkit rig`.
 #[derive(clap::Args, Debug)]
@@ -36,9 +40,16 @@ pub struct RigArgs {
     /// Source expressions: mesh files, quoted globs, or one .glb/.gltf with morph targets.
     #[arg(long, required = true, num_args = 1.., value_name = "SHAPES")]
     pub source_shapes: Vec<String>,
-    /// Target neutral mesh (the new character).
+    /// Target neutral mesh (the new character); a .glb/.gltf target's chosen mesh, and the
+    /// output is that asset with the shapes added.
     #[arg(long, value_name = "MESH")]
     pub target: PathBuf,
+    /// The mesh of a .glb/.gltf --target, by name (needed when several have morph targets).
+    #[arg(long, value_name = "NAME")]
+    pub mesh: Option<String>,
+    /// The mesh of a .glb/.gltf --source-shapes, by name.
+    #[arg(long, value_name = "NAME")]
+    pub source_mesh: Option<String>,
     #[command(flatten)]
     pub corr: CorrespondenceArgs,
     /// Output rig: .glb or .gltf, the target with one named morph target per shape, or .usda
@@ -88,7 +99,10 @@ fn read_source(args: &RigArgs, files: &[PathBuf]) -> anyhow::Result<(TriMesh, Sh
         _ => None,
     };
     if let Some(g) = glb {
-        let m = io::read_gltf_morphs(g)?;
+        let opts = GltfReadOptions {
+            mesh: args.source_mesh.clone(),
+        };
+        let m = io::read_gltf_morphs_with(g, &opts)?;
         if m.targets.is_empty() {
             bail!("{}: has no morph targets", g.display());
         }
@@ -111,6 +125,37 @@ fn read_source(args: &RigArgs, files: &[PathBuf]) -> anyhow::Result<(TriMesh, Sh
         .map(|i| (stem(&files[i]), set.positions(i).to_vec()))
         .collect();
     Ok((neutral, ShapeSet::new(set.base().clone(), named)?))
+}
+
+/// The target neutral, and the --target asset when it is a .glb/.gltf written to a .glb/.gltf
+/// (with room for the shapes under --max-targets).
+fn read_target(args: &RigArgs, shapes: &ShapeSet) -> anyhow::Result<(TriMesh, Option<GltfAsset>)> {
+    let gltf = |p: &Path| matches!(Format::from_path(p), Some(Format::Glb | Format::Gltf));
+    if !gltf(&args.target) {
+        if args.mesh.is_some() {
+            bail!("--mesh chooses the mesh of a .glb/.gltf --target");
+        }
+        return Ok((io::read_mesh(&args.target)?, None));
+    }
+    let opts = GltfReadOptions {
+        mesh: args.mesh.clone(),
+    };
+    if !gltf(&args.out) {
+        return Ok((io::read_mesh_with(&args.target, &opts)?.0, None));
+    }
+    let mut asset = GltfAsset::read(&args.target, &opts)?;
+    let mesh = asset.morphs().base.clone();
+    morphkit::mesh::validate(&mesh)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.target.display()))?;
+    asset.set_max_targets(crate::outputs::asset_max_targets());
+    let existing = &asset.morphs().target_names;
+    let fresh = shapes
+        .names()
+        .iter()
+        .filter(|n| !existing.contains(n))
+        .count();
+    asset.check_room(fresh)?;
+    Ok((mesh, Some(asset)))
 }
 
 /// Runs `morphkit rig`.
@@ -156,7 +201,7 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
         plan = plan.output("--shapes-dir", p, Kind::Mesh);
     }
     let mut outputs = plan.check()?;
-    let target = io::read_mesh(&args.target)?;
+    let (target, asset) = read_target(args, &shapes)?;
 
     let mut report = json!({
         "source_neutral": args.source_neutral,
@@ -234,7 +279,10 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
         weight_keys: Vec::new(),
     };
     // Named after the new head.
-    if Format::from_path(&args.out) == Some(Format::Usda) {
+    if let Some(mut asset) = asset {
+        asset.add_targets(&rig.target_names, &rig.targets)?;
+        outputs.gltf_asset(&args.out, &asset, std::slice::from_ref(&args.target), 0)?;
+    } else if Format::from_path(&args.out) == Some(Format::Usda) {
         outputs.usd_blendshapes(&args.out, &rig, std::slice::from_ref(&args.target))?;
     } else {
         outputs.gltf_from(&args.out, &rig, std::slice::from_ref(&args.target))?;

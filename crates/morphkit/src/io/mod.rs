@@ -5,7 +5,7 @@
 //! | OBJ | [`obj`] | [`obj`] | `v`/`f` only, polygons kept, full `f64` precision; `.obj.gz` both ways |
 //! | PLY | [`ply`] | [`ply`] | ascii and binary; written binary little endian, optionally coloured |
 //! | OFF | [`off`] | [`off`] | |
-//! | glTF / GLB | [`gltf`] | [`gltf`] | the mesh with morph targets (or the first; choose by name with [`GltfReadOptions`]); quantized, meshopt and sparse accessors; morph-weight animations |
+//! | glTF / GLB | [`gltf`] | [`gltf`] | the mesh with morph targets (or the first; choose by name with [`GltfReadOptions`]); quantized, meshopt and sparse accessors; morph-weight animations; a user's whole asset edited in place with [`GltfAsset`] |
 //! | PC2 | [`pc2`] | [`pc2`] | positions only; connectivity from a reference mesh |
 //! | USD (`.usda`) | [`usd`] (minimal) | [`usd`] | time-sampled `points`; `UsdSkel` blend shapes |
 //! | weights | [`weights`] | | per-frame blend weights, JSON or CSV |
@@ -42,8 +42,9 @@ pub use format::Format;
 pub use frame_stream::FrameStream;
 pub use gltf::{
     parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs, read_gltf_morphs_with,
-    write_gltf_morphs, write_gltf_scene, write_gltf_scene_with, write_gltf_with, GltfMorphs,
-    GltfOptions, GltfReadOptions, GltfRigidMesh, GltfSummary, SAFE_MORPH_TARGETS,
+    write_gltf_morphs, write_gltf_scene, write_gltf_scene_with, write_gltf_with, GltfAsset,
+    GltfAssetOptions, GltfMorphs, GltfOptions, GltfReadOptions, GltfRigidMesh, GltfSummary,
+    GltfWeightAnimation, SAFE_MORPH_TARGETS,
 };
 pub use obj_template::ObjTemplate;
 pub use ply::{write_ply_colored, PlyEncoding};
@@ -58,7 +59,9 @@ pub use usd::{
     read_usd_animation, write_usd_animation, write_usd_blendshapes, UpAxis, UsdAnimation,
     UsdOptions,
 };
-pub use weights::{parse_weights, read_weights, WeightRow};
+pub use weights::{
+    parse_named_weights, parse_weights, read_named_weights, read_weights, WeightRow,
+};
 
 use crate::mesh::{validate, TriMesh, ValidationReport};
 use std::path::Path;
@@ -76,6 +79,15 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh, IoError> {
 /// Like [`read_mesh`], also returning the validation warnings (degenerate or duplicate
 /// triangles, coincident or isolated vertices).
 pub fn read_mesh_with_report(path: &Path) -> Result<(TriMesh, ValidationReport), IoError> {
+    read_mesh_with(path, &GltfReadOptions::default())
+}
+
+/// [`read_mesh_with_report`] choosing the mesh of a glTF file with `gltf`
+/// ([`GltfReadOptions::mesh`]); other formats ignore it.
+pub fn read_mesh_with(
+    path: &Path,
+    gltf: &GltfReadOptions,
+) -> Result<(TriMesh, ValidationReport), IoError> {
     if path.is_dir() {
         return Err(IoError::IsDirectory {
             path: path.to_path_buf(),
@@ -85,7 +97,7 @@ pub fn read_mesh_with_report(path: &Path) -> Result<(TriMesh, ValidationReport),
         Format::Obj { .. } => obj::read_obj(path)?,
         Format::Ply => ply::parse_ply(path, &source::read_file(path)?)?,
         Format::Off => off::parse_off(path, &source::read_file(path)?)?,
-        Format::Gltf | Format::Glb => read_gltf_morphs(path)?.base,
+        Format::Gltf | Format::Glb => read_gltf_morphs_with(path, gltf)?.base,
         Format::Usda => read_usd_animation(path)?.mesh,
         Format::Pc2 => {
             return Err(IoError::NeedsReference {

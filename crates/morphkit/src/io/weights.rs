@@ -27,6 +27,12 @@ pub struct WeightRow {
 
 /// Reads a weights file; JSON when the extension is `.json` or the text starts with `[` or `{`.
 pub fn read_weights(path: &Path) -> Result<Vec<WeightRow>, IoError> {
+    let (text, json) = read_text(path)?;
+    parse_weights(path, &text, json)
+}
+
+/// The text of a weights file (size-limited, UTF-8), and whether its extension says JSON.
+fn read_text(path: &Path) -> Result<(String, bool), IoError> {
     if path.is_dir() {
         return Err(IoError::IsDirectory {
             path: path.to_path_buf(),
@@ -48,7 +54,88 @@ pub fn read_weights(path: &Path) -> Result<Vec<WeightRow>, IoError> {
     let json = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("json"));
-    parse_weights(path, &text, json)
+    Ok((text, json))
+}
+
+/// Reads a weights file for a rig whose morph targets are named `targets` (see
+/// [`parse_named_weights`]).
+pub fn read_named_weights(path: &Path, targets: &[String]) -> Result<Vec<WeightRow>, IoError> {
+    let (text, json) = read_text(path)?;
+    parse_named_weights(path, &text, json, targets)
+}
+
+/// Parses weights for a rig whose morph targets are named `targets`: a CSV whose header row
+/// names targets (`jawOpen,smile`, in any order, any subset) gives rows of one weight per
+/// target, in the order of `targets`, 0 for the targets it does not name. Without a header
+/// (and for JSON) the rows are as [`parse_weights`] reads them: one weight per target, in
+/// order, which is the caller's to check.
+///
+/// Errors: those of [`parse_weights`]; a header name that is no target (the error lists the
+/// targets), a name given twice, a row with another number of weights than the header names.
+pub fn parse_named_weights(
+    path: &Path,
+    text: &str,
+    json: bool,
+    targets: &[String],
+) -> Result<Vec<WeightRow>, IoError> {
+    let rows = parse_weights(path, text, json)?;
+    let text = strip_bom_str(text);
+    if json || text.trim_start().starts_with(['[', '{']) {
+        return Ok(rows);
+    }
+    let Some(first) = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))
+    else {
+        return Ok(rows);
+    };
+    let header: Vec<&str> = first.split([',', ';', '\t']).map(str::trim).collect();
+    if header.iter().all(|f| f.parse::<f64>().is_ok()) {
+        return Ok(rows);
+    }
+    let mut columns = Vec::with_capacity(header.len());
+    for (i, name) in header.iter().enumerate() {
+        let Some(t) = targets.iter().position(|t| t == name) else {
+            return Err(IoError::parse(
+                path,
+                1 + text.lines().position(|l| l.trim() == first).unwrap_or(0),
+                format!(
+                    "column {} of the header is '{}', which names no morph target; the targets: {}",
+                    i + 1,
+                    show(name),
+                    show(&targets.join(", "))
+                ),
+            ));
+        };
+        if columns.contains(&t) {
+            return Err(IoError::content(
+                path,
+                format!("the header names the target '{name}' twice"),
+            ));
+        }
+        columns.push(t);
+    }
+    rows.into_iter()
+        .map(|r| {
+            if r.values.len() != columns.len() {
+                return Err(IoError::parse(
+                    path,
+                    r.line.unwrap_or(0),
+                    format!(
+                        "{} weights, but the header names {} targets",
+                        r.values.len(),
+                        columns.len()
+                    ),
+                ));
+            }
+            let mut values = vec![0.0; targets.len()];
+            for (&t, &x) in columns.iter().zip(&r.values) {
+                values[t] = x;
+            }
+            Ok(WeightRow { values, ..r })
+        })
+        .collect()
 }
 
 /// Parses weights text (see the module docs); `json` forces JSON. `path` names the file in
@@ -197,6 +284,34 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("field 2 is empty"), "{e}");
+    }
+
+    #[test]
+    fn a_header_names_the_targets_of_each_column() {
+        let names = ["jaw".to_string(), "smile".into(), "blink".into()];
+        let rows =
+            parse_named_weights(p(), "# keys\nsmile,jaw\n0.5,0.25\n1,0\n", false, &names).unwrap();
+        assert_eq!(rows[0].values, [0.25, 0.5, 0.0]);
+        assert_eq!(rows[1].values, [0.0, 1.0, 0.0]);
+        assert_eq!(rows[1].line, Some(4));
+        // Without a header: as read.
+        let rows = parse_named_weights(p(), "0.5,0.25\n", false, &names).unwrap();
+        assert_eq!(rows[0].values, [0.5, 0.25]);
+        let e = parse_named_weights(p(), "jaw,frown\n0,1\n", false, &names)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("w.csv:1: column 2 of the header is 'frown'")
+                && e.contains("jaw, smile, blink"),
+            "{e}"
+        );
+        let e = parse_named_weights(p(), "jaw,smile\n0,1,1\n", false, &names)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("w.csv:2: 3 weights, but the header names 2"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -24,6 +24,143 @@ pub(super) fn target_names(extras: &::gltf::json::Extras, n: usize) -> Vec<Strin
     }
 }
 
+/// A channel that drives the morph weights of a node using a given mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct WeightChannel {
+    /// Animation index.
+    pub anim: usize,
+    /// Channel index in the animation.
+    pub channel: usize,
+    /// Sampler index in the animation.
+    pub sampler: usize,
+    /// The node it drives.
+    pub node: usize,
+}
+
+/// Every channel, in document order, that drives the `weights` of a node using mesh `mesh`.
+pub(super) fn weight_channels(doc: &::gltf::Document, mesh: usize) -> Vec<WeightChannel> {
+    let mut out = Vec::new();
+    for (a, aj) in doc.as_json().animations.iter().enumerate() {
+        for (c, cj) in aj.channels.iter().enumerate() {
+            // Read the raw JSON: `property()` and `node()` unwrap values that the `gltf`
+            // crate's validation lets through (an unknown path panicked; found by cargo fuzz).
+            let node = cj.target.node.value();
+            if cj.target.path != Checked::Valid(Property::MorphTargetWeights)
+                || doc
+                    .nodes()
+                    .nth(node)
+                    .and_then(|n| n.mesh())
+                    .map(|m| m.index())
+                    != Some(mesh)
+                || cj.sampler.value() >= aj.samplers.len()
+            {
+                continue;
+            }
+            out.push(WeightChannel {
+                anim: a,
+                channel: c,
+                sampler: cj.sampler.value(),
+                node,
+            });
+        }
+    }
+    out
+}
+
+/// The key times and the raw output values (`keys × num_targets`, or `keys × 3 × num_targets`
+/// for `CUBICSPLINE`: in-tangents, values, out-tangents) of a weights channel, checked; and
+/// whether it is `CUBICSPLINE`.
+pub(super) fn channel_data(
+    path: &Path,
+    doc: &::gltf::Document,
+    ch: WeightChannel,
+    num_targets: usize,
+    data: &Data,
+) -> Result<(Vec<f64>, Vec<f64>, bool), IoError> {
+    let at = |m: String| {
+        IoError::content(
+            path,
+            format!("animation {}, channel {}: {m}", ch.anim, ch.channel),
+        )
+    };
+    let anim = doc
+        .animations()
+        .nth(ch.anim)
+        .ok_or_else(|| at("is not in the file".into()))?;
+    let sampler = anim
+        .samplers()
+        .nth(ch.sampler)
+        .ok_or_else(|| at("its sampler is not in the file".into()))?;
+    let (input, output) = (sampler.input(), sampler.output());
+    if input.dimensions() != Dimensions::Scalar || input.data_type() != DataType::F32 {
+        return Err(at(format!(
+            "the input accessor {} must be SCALAR float (key times), not {:?} {:?}",
+            input.index(),
+            input.dimensions(),
+            input.data_type()
+        )));
+    }
+    if output.dimensions() != Dimensions::Scalar || output.data_type() == DataType::U32 {
+        return Err(at(format!(
+            "the output accessor {} must be SCALAR weights, not {:?} {:?}",
+            output.index(),
+            output.dimensions(),
+            output.data_type()
+        )));
+    }
+    let times = accessor::read(&input, data).map_err(at)?;
+    let w = accessor::read(&output, data).map_err(at)?;
+    let aj = &doc.as_json().animations[ch.anim];
+    let interpolation = match aj.samplers.get(ch.sampler).map(|s| s.interpolation) {
+        Some(Checked::Valid(i)) => i,
+        _ => return Err(at("the sampler's interpolation is not valid".into())),
+    };
+    let cubic = interpolation == Interpolation::CubicSpline;
+    let per_key = if cubic { 3 * num_targets } else { num_targets };
+    if Some(w.len()) != times.len().checked_mul(per_key) {
+        return Err(at(format!(
+            "{} weights for {} keys × {} targets{}",
+            w.len(),
+            times.len(),
+            num_targets,
+            if cubic {
+                " × 3 (CUBICSPLINE: in-tangent, value, out-tangent)"
+            } else {
+                ""
+            }
+        )));
+    }
+    if let Some(k) = times.iter().position(|t| !t.is_finite()) {
+        return Err(at(format!("key {k} has a non-finite time {}", times[k])));
+    }
+    if let Some(i) = w.iter().position(|x| !x.is_finite()) {
+        return Err(at(format!(
+            "key {}: the weight of target {} is not finite ({})",
+            i / per_key,
+            i % num_targets.max(1),
+            w[i]
+        )));
+    }
+    Ok((times, w, cubic))
+}
+
+/// The keys `(time, weights)` of channel data ([`channel_data`]): `STEP` and `LINEAR` keys as
+/// they are; of `CUBICSPLINE` keys (in-tangent, value, out-tangent) the value.
+pub(super) fn keys_of(
+    times: &[f64],
+    values: &[f64],
+    cubic: bool,
+    num_targets: usize,
+) -> Vec<(f64, Vec<f64>)> {
+    let per_key = if cubic { 3 * num_targets } else { num_targets };
+    let skip = if cubic { num_targets } else { 0 };
+    times
+        .iter()
+        .zip(values.chunks_exact(per_key.max(1)))
+        .map(|(&t, c)| (t, c[skip..skip + num_targets].to_vec()))
+        .collect()
+}
+
 /// The keys of the first animation channel driving the `weights` of a node that uses mesh
 /// `mesh`. `STEP` and `LINEAR` keys are taken as they are; of `CUBICSPLINE` keys (in-tangent,
 /// value, out-tangent) the value.
@@ -37,81 +174,9 @@ pub(super) fn weight_keys(
     if num_targets == 0 {
         return Ok(Vec::new());
     }
-    for anim in doc.animations() {
-        for ch in anim.channels() {
-            let target = ch.target();
-            // Read the raw JSON: `property()` and `node()` unwrap values that the `gltf`
-            // crate's validation lets through (an unknown path panicked; found by cargo fuzz).
-            let aj = &doc.as_json().animations[anim.index()];
-            let tj = &aj.channels[ch.index()].target;
-            if tj.path != Checked::Valid(Property::MorphTargetWeights)
-                || tj.node.value() >= doc.nodes().len()
-                || target.node().mesh().map(|m| m.index()) != Some(mesh)
-            {
-                continue;
-            }
-            let at = |m: String| {
-                IoError::content(
-                    path,
-                    format!("animation {}, channel {}: {m}", anim.index(), ch.index()),
-                )
-            };
-            let (input, output) = (ch.sampler().input(), ch.sampler().output());
-            if input.dimensions() != Dimensions::Scalar || input.data_type() != DataType::F32 {
-                return Err(at(format!(
-                    "the input accessor {} must be SCALAR float (key times), not {:?} {:?}",
-                    input.index(),
-                    input.dimensions(),
-                    input.data_type()
-                )));
-            }
-            if output.dimensions() != Dimensions::Scalar || output.data_type() == DataType::U32 {
-                return Err(at(format!(
-                    "the output accessor {} must be SCALAR weights, not {:?} {:?}",
-                    output.index(),
-                    output.dimensions(),
-                    output.data_type()
-                )));
-            }
-            let times = accessor::read(&input, data).map_err(at)?;
-            let w = accessor::read(&output, data).map_err(at)?;
-            let sampler = aj.samplers.get(aj.channels[ch.index()].sampler.value());
-            let interpolation = match sampler.map(|s| s.interpolation) {
-                Some(Checked::Valid(i)) => i,
-                _ => return Err(at("the sampler's interpolation is not valid".into())),
-            };
-            let cubic = interpolation == Interpolation::CubicSpline;
-            let per_key = if cubic { 3 * num_targets } else { num_targets };
-            if Some(w.len()) != times.len().checked_mul(per_key) {
-                return Err(at(format!(
-                    "{} weights for {} keys × {} targets{}",
-                    w.len(),
-                    times.len(),
-                    num_targets,
-                    if cubic {
-                        " × 3 (CUBICSPLINE: in-tangent, value, out-tangent)"
-                    } else {
-                        ""
-                    }
-                )));
-            }
-            if let Some(k) = times.iter().position(|t| !t.is_finite()) {
-                return Err(at(format!("key {k} has a non-finite time {}", times[k])));
-            }
-            let skip = if cubic { num_targets } else { 0 };
-            let mut keys = Vec::with_capacity(times.len());
-            for (k, (&t, c)) in times.iter().zip(w.chunks_exact(per_key)).enumerate() {
-                let v = &c[skip..skip + num_targets];
-                if let Some(j) = v.iter().position(|x| !x.is_finite()) {
-                    return Err(at(format!(
-                        "key {k}: the weight of target {j} is not finite ({})",
-                        v[j]
-                    )));
-                }
-                keys.push((t, v.to_vec()));
-            }
-            return Ok(keys);
-        }
-    }
-    Ok(Vec::new())
+    let Some(&ch) = weight_channels(doc, mesh).first() else {
+        return Ok(Vec::new());
+    };
+    let (times, w, cubic) = channel_data(path, doc, ch, num_targets, data)?;
+    Ok(keys_of(&times, &w, cubic, num_targets))
 }

@@ -55,9 +55,19 @@
 //!   [`GltfOptions::name`] and [`GltfOptions::clip_name`]; `mesh.extras.targetNames` holds the
 //!   target names; [`GltfOptions::extras`] becomes `scenes[0].extras` (the command, the sources,
 //!   the blend weights per frame), where Blender shows it as custom properties.
+//!
+//! **Editing a user's asset** ([`GltfAsset`]): the writer above makes a fresh file with only the
+//! rig in it. To give users their own asset back (materials, textures, skins, other meshes and
+//! nodes, names, extras, transforms), read it whole with [`GltfAsset::read`], edit its chosen
+//! mesh ([`GltfAsset::set_base`], [`GltfAsset::add_targets`], [`GltfAsset::add_frame_animation`])
+//! and [`GltfAsset::write`] it: everything not edited is carried, all buffers are merged into
+//! one and external images embedded. See `docs/gltf-assets.md`.
 
 mod accessor;
 mod anim;
+mod asset;
+mod asset_edit;
+mod asset_write;
 mod buffers;
 mod extensions;
 mod normals;
@@ -68,6 +78,7 @@ mod split;
 mod write;
 mod write_scene;
 
+pub use asset::{GltfAsset, GltfAssetOptions, GltfWeightAnimation};
 pub use read::{
     parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs, read_gltf_morphs_with,
     GltfReadOptions,
@@ -146,5 +157,7 @@ impl GltfMorphs {
     }
 }
 
+#[cfg(test)]
+mod asset_tests;
 #[cfg(test)]
 mod read_tests;

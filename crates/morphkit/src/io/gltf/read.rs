@@ -127,6 +127,44 @@ pub fn parse_gltf_morphs_with(
     bytes: Vec<u8>,
     opts: &GltfReadOptions,
 ) -> Result<GltfMorphs, IoError> {
+    load_with(path, bytes, opts, |_| Ok(())).map(|(l, ())| l.morphs)
+}
+
+/// Everything a read found: the JSON as in the file, the buffers, the chosen mesh and its
+/// merged morphs (what [`super::GltfAsset`] keeps).
+pub(super) struct Loaded {
+    /// The document's JSON text, as in the file (before supported required extensions were
+    /// removed for the `gltf` crate).
+    pub json: Vec<u8>,
+    /// The bytes of every buffer (empty for meshopt fallback buffers).
+    pub buffers: Vec<Vec<u8>>,
+    /// Per buffer: a meshopt fallback buffer, without data.
+    pub fallback: Vec<bool>,
+    /// The index of the chosen mesh.
+    pub mesh: usize,
+    /// Per primitive of the chosen mesh: its vertex and triangle counts, in primitive order.
+    pub primitives: Vec<(usize, usize)>,
+    /// True when the mesh is the first part of a rig morphkit split into several meshes.
+    pub split: bool,
+    /// The merged mesh, its targets and the first weights animation.
+    pub morphs: GltfMorphs,
+}
+
+/// What `scan` of [`load_with`] sees: the parsed document, its decoded data and the mesh.
+pub(super) struct Scan<'a> {
+    pub doc: &'a ::gltf::Document,
+    pub data: &'a Data<'a>,
+    pub mesh: ::gltf::Mesh<'a>,
+}
+
+/// Reads the file's bytes as [`parse_gltf_morphs_with`] does, also calling `scan` on the parsed
+/// document (for what [`super::GltfAsset`] needs beyond the morphs).
+pub(super) fn load_with<T>(
+    path: &Path,
+    bytes: Vec<u8>,
+    opts: &GltfReadOptions,
+    scan: impl FnOnce(Scan) -> Result<T, IoError>,
+) -> Result<(Loaded, T), IoError> {
     let is_glb = bytes.starts_with(b"glTF");
     if is_glb {
         check_glb(path, &bytes)?;
@@ -152,22 +190,22 @@ pub fn parse_gltf_morphs_with(
         cause: source,
     };
     super::precheck::check_positions(path, super::super::strip_bom(&bytes))?;
-    let (json, blob): (Cow<[u8]>, Option<Vec<u8>>) = if is_glb {
+    let (json, blob): (Vec<u8>, Option<Vec<u8>>) = if is_glb {
         let glb = ::gltf::Glb::from_slice(&bytes).map_err(gerr)?;
-        (
-            Cow::Owned(glb.json.into_owned()),
-            glb.bin.map(Cow::into_owned),
-        )
+        // The file's bytes are no longer needed once the JSON and the BIN chunk are copied.
+        (glb.json.into_owned(), glb.bin.map(Cow::into_owned))
     } else {
-        (Cow::Borrowed(super::super::strip_bom(&bytes)), None)
+        // The text is the JSON: no copy, only the byte-order mark removed.
+        let mut bytes = bytes;
+        let bom = bytes.len() - super::super::strip_bom(&bytes).len();
+        bytes.drain(..bom);
+        (bytes, None)
     };
     let stripped = extensions::strip_required(path, &json)?;
     let gltf = ::gltf::Gltf::from_slice_without_validation(stripped.as_deref().unwrap_or(&json))
         .map_err(gerr)?;
     validate(&gltf.document).map_err(gerr)?;
-    drop((json, stripped));
-    // The file's bytes are no longer needed: the BIN chunk was copied into the blob.
-    drop(bytes);
+    drop(stripped);
     let doc = &gltf.document;
     // glTF requires count ≥ 1 (the gltf crate computed `count - 1` unchecked; cargo fuzz).
     if let Some(a) = doc.accessors().find(|a| a.count() == 0) {
@@ -187,7 +225,7 @@ pub fn parse_gltf_morphs_with(
         views: &views,
     };
     let mesh = choose_mesh(path, doc, opts)?;
-    let (base, displacements) = read_mesh(path, &mesh, &data)?;
+    let (base, displacements, primitives) = read_mesh(path, &mesh, &data)?;
     // Displacements become absolute positions in place (no second copy of every target).
     let mut targets = displacements;
     for d in &mut targets {
@@ -195,26 +233,45 @@ pub fn parse_gltf_morphs_with(
             *q = [b[0] + q[0], b[1] + q[1], b[2] + q[2]];
         }
     }
-    if mesh.index() == 0 {
-        if let Some((target_names, targets, weight_keys)) =
-            super::read_chunks::read_split(path, doc, &data, &base.positions)?
-        {
-            return Ok(GltfMorphs {
-                base,
-                target_names,
-                targets,
-                weight_keys,
-            });
-        }
-    }
-    let target_names = target_names(mesh.extras(), targets.len());
-    let weight_keys = weight_keys(path, doc, mesh.index(), targets.len(), &data)?;
-    Ok(GltfMorphs {
-        base,
-        target_names,
-        targets,
-        weight_keys,
-    })
+    let split_rig = if mesh.index() == 0 {
+        super::read_chunks::read_split(path, doc, &data, &base.positions)?
+    } else {
+        None
+    };
+    let split = split_rig.is_some();
+    let morphs = match split_rig {
+        Some((target_names, targets, weight_keys)) => GltfMorphs {
+            base,
+            target_names,
+            targets,
+            weight_keys,
+        },
+        None => GltfMorphs {
+            target_names: target_names(mesh.extras(), targets.len()),
+            weight_keys: weight_keys(path, doc, mesh.index(), targets.len(), &data)?,
+            base,
+            targets,
+        },
+    };
+    let index = mesh.index();
+    let extra = scan(Scan {
+        doc,
+        data: &data,
+        mesh,
+    })?;
+    drop(views);
+    Ok((
+        Loaded {
+            json,
+            buffers,
+            fallback,
+            mesh: index,
+            primitives,
+            split,
+            morphs,
+        },
+        extra,
+    ))
 }
 
 /// The `gltf` crate's validation, except that an accessor may have neither a buffer view nor
@@ -302,13 +359,14 @@ fn choose_mesh<'a>(
     }
 }
 
-/// The base mesh (all triangle primitives merged, indices offset by the vertices before) and
-/// the morph-target displacements of `mesh`.
+/// The base mesh (all triangle primitives merged, indices offset by the vertices before), the
+/// morph-target displacements of `mesh`, and each primitive's vertex and triangle counts.
+#[allow(clippy::type_complexity)]
 fn read_mesh(
     path: &Path,
     mesh: &::gltf::Mesh,
     data: &Data,
-) -> Result<(TriMesh, Vec<Vec<Point>>), IoError> {
+) -> Result<(TriMesh, Vec<Vec<Point>>, Vec<(usize, usize)>), IoError> {
     let label = mesh_label(mesh);
     let mut positions: Vec<Point> = Vec::new();
     let mut polys = Polygons {
@@ -316,6 +374,7 @@ fn read_mesh(
         indices: Vec::new(),
     };
     let mut displacements: Vec<Vec<Point>> = Vec::new();
+    let mut counts = Vec::new();
     for (pi, prim) in mesh.primitives().enumerate() {
         let at = |m: String| IoError::content(path, format!("{label}, primitive {pi}: {m}"));
         if prim.mode() != Mode::Triangles {
@@ -408,6 +467,11 @@ fn read_mesh(
             displacements[t].extend(d);
         }
         positions.extend(p);
+        counts.push((n, idx.len() / 3));
     }
-    Ok((TriMesh::from_polygons(positions, polys), displacements))
+    Ok((
+        TriMesh::from_polygons(positions, polys),
+        displacements,
+        counts,
+    ))
 }

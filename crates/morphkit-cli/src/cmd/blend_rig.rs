@@ -1,0 +1,142 @@
+//! `morphkit blend --rig FILE.glb`: the base, the named morph targets and a weights animation
+//! of a user's glTF asset drive the physical blend, and the output is that asset with the
+//! physical animation added ([`morphkit::io::GltfAsset::add_frame_animation`]).
+//!
+//! The weights of frame `k` are key `k` of the file's weights animation (`--animation NAME`
+//! picks one when several drive the mesh), played at the key's time; or row `k` of
+//! `--weights-file`, whose CSV header row may name the targets (others weigh 0), at `k / fps`
+//! seconds. The solve is `blend`'s own (welding included); only the reading and the writing
+//! differ.
+
+use super::blend::{BlendArgs, MAX_FRAMES};
+use crate::outputs::Outputs;
+use crate::weights::{self, Origin};
+use anyhow::{bail, Context};
+use morphkit::io::{self, Format, GltfAsset, GltfReadOptions};
+use morphkit::mesh::{Point, ShapeSet};
+use morphkit::springs::Weights;
+use std::path::{Path, PathBuf};
+
+/// A rig read for `blend --rig`.
+pub(super) struct Rig {
+    /// The asset, carried to a .glb/.gltf output.
+    pub asset: GltfAsset,
+    /// Per frame: its delta weights, one per target.
+    pub weights: Vec<Weights>,
+    /// Per frame: its time in seconds.
+    pub times: Vec<f64>,
+    /// The name of the physical animation.
+    pub clip: String,
+}
+
+/// True when `out` receives the asset (a .glb/.gltf file).
+pub(super) fn carries(out: &Path) -> bool {
+    matches!(Format::from_path(out), Some(Format::Glb | Format::Gltf))
+}
+
+/// Reads `--rig` with its weights, and its base and targets (named) as shapes (see the
+/// [module documentation](self)); refuses, before any solve, an output asset that would hold
+/// more targets than --max-targets.
+pub(super) fn read(a: &BlendArgs, path: &Path) -> anyhow::Result<(Rig, ShapeSet)> {
+    let opts = GltfReadOptions {
+        mesh: a.mesh.clone(),
+    };
+    let mut asset = GltfAsset::read(path, &opts)?;
+    let m = asset.morphs();
+    if m.targets.is_empty() {
+        bail!(
+            "{}: the mesh has no morph targets to blend; give --base and --target instead",
+            path.display()
+        );
+    }
+    // Shape 0 is the base, then the targets.
+    let named = std::iter::once(("base".to_string(), m.base.positions.clone()))
+        .chain(m.target_names.iter().cloned().zip(m.targets.clone()))
+        .collect();
+    let shapes = ShapeSet::new(m.base.clone(), named)
+        .with_context(|| format!("{}: the morph targets", path.display()))?;
+    let n_shapes = shapes.len();
+    let (weights, times, clip) = match &a.weights_file {
+        Some(f) => {
+            let rows = io::read_named_weights(f, &m.target_names)?;
+            if rows.len() > MAX_FRAMES {
+                bail!(
+                    "{}: {} rows are more than the {MAX_FRAMES} frames one run writes",
+                    f.display(),
+                    rows.len()
+                );
+            }
+            let mut w = Vec::with_capacity(rows.len());
+            for (frame, row) in rows.iter().enumerate() {
+                let x = Weights::Delta(row.values.clone());
+                weights::check(
+                    &x,
+                    n_shapes,
+                    Origin::File {
+                        path: f,
+                        row,
+                        frame,
+                    },
+                )?;
+                w.push(x);
+            }
+            let times = (0..w.len()).map(|k| k as f64 / a.fps).collect();
+            let stem = f
+                .file_stem()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            (w, times, format!("{stem}-physical"))
+        }
+        None => {
+            let Some(anim) = asset.weight_animation(a.animation.as_deref())? else {
+                bail!(
+                    "{}: no animation drives the morph weights of the mesh; give --weights-file (a CSV whose header names the targets: {})",
+                    path.display(),
+                    m.target_names.join(", ")
+                );
+            };
+            let mut w = Vec::with_capacity(anim.keys.len());
+            for (k, (_, keys)) in anim.keys.iter().enumerate() {
+                let x = Weights::Delta(keys.clone());
+                let at = format!("{} (animation key {k})", path.display());
+                weights::check(&x, n_shapes, Origin::Flag(&at))?;
+                w.push(x);
+            }
+            let times = anim.keys.iter().map(|k| k.0).collect();
+            let name = anim.name.clone().unwrap_or_else(|| "animation".into());
+            (w, times, format!("{name}-physical"))
+        }
+    };
+    if carries(&a.out) {
+        asset.set_max_targets(crate::outputs::asset_max_targets());
+        asset.check_room(weights.len())?;
+    }
+    let rig = Rig {
+        asset,
+        weights,
+        times,
+        clip,
+    };
+    Ok((rig, shapes))
+}
+
+/// Adds the solved `frames` (the input's layout, one per weight vector) to the rig's asset as
+/// its physical animation and stages it at `out`.
+pub(super) fn write(
+    outputs: &mut Outputs,
+    out: &Path,
+    mut rig: Rig,
+    frames: Vec<(String, Vec<Point>)>,
+    inputs: &[PathBuf],
+) -> anyhow::Result<()> {
+    let positions: Vec<Vec<Point>> = frames.into_iter().map(|f| f.1).collect();
+    rig.asset
+        .add_frame_animation(&rig.clip, &rig.times, &positions)?;
+    outputs.gltf_asset(out, &rig.asset, inputs, positions.len())?;
+    eprintln!(
+        "added the animation '{}' ({} frames, one morph target each) to the asset of {}",
+        rig.clip,
+        positions.len(),
+        rig.asset.path().display()
+    );
+    Ok(())
+}
