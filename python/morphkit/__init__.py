@@ -31,10 +31,12 @@ from ._morphkit import (
     read,
     read_animation,
     read_morphs,
+    read_rig,
     synthesize,
     write,
     write_animation,
     write_morphs,
+    write_rig,
 )
 
 __all__ = [
@@ -58,9 +60,11 @@ __all__ = [
     "metrics",
     "read",
     "read_animation",
+    "read_rig",
     "read_morphs",
     "synthesize",
     "write",
     "write_animation",
     "write_morphs",
+    "write_rig",
 ]

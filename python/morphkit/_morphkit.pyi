@@ -41,7 +41,27 @@ def read_animation(
     path: PathLike, reference: Optional[PathLike] = None
 ) -> Tuple[Frames, Faces, List[str]]: ...
 def write_animation(
-    path: PathLike, frames: Union[ArrayLike, Sequence[ArrayLike]], f: ArrayLike, fps: float = 24.0
+    path: PathLike,
+    frames: Union[ArrayLike, Sequence[ArrayLike]],
+    f: Optional[ArrayLike] = None,
+    fps: float = 24.0,
+    template: Optional[PathLike] = None,
+    clip: Optional[str] = None,
+    times: Optional[Sequence[float]] = None,
+    mesh: Optional[str] = None,
+    max_targets: int = 200,
+) -> None: ...
+def read_rig(
+    path: PathLike, mesh: Optional[str] = None, animation: Optional[str] = None
+) -> Dict[str, Any]: ...
+def write_rig(
+    path: PathLike,
+    template: PathLike,
+    targets: Union[ArrayLike, Sequence[ArrayLike]],
+    names: Sequence[str],
+    base: Optional[ArrayLike] = None,
+    mesh: Optional[str] = None,
+    max_targets: int = 200,
 ) -> None: ...
 def metrics(v_rest: ArrayLike, v: ArrayLike, f: ArrayLike) -> Dict[str, Any]: ...
 def continuity(

@@ -126,16 +126,50 @@ pub fn read_animation<'py>(
 /// Writes `frames` `(k, n, 3)` over the connectivity `F`: a directory of numbered OBJ frames
 /// (a path without extension), a `.glb`/`.gltf` morph-weight animation at `fps`, or a `.pc2`
 /// cache.
+///
+/// With `template` (a `.glb`/`.gltf`, written to a `.glb`/`.gltf` `path`), the frames are added
+/// to that asset instead: one morph target per frame on its mesh (`mesh` chooses it by name)
+/// and an animation `clip` (default `morphkit`) keying them at `times` (default `k / fps`
+/// seconds); its materials, skins, other meshes and nodes are kept, and `F` is not needed
+/// (the template's). `max_targets` (default 200; 0 for no limit) refuses a mesh that would get
+/// more targets than WebGL2 viewers play.
+///
+/// >>> morphkit.write_animation("physical.glb", frames, template="face.glb", clip="talk-physical")
 #[pyfunction]
-#[pyo3(signature = (path, frames, f, fps=24.0))]
+#[pyo3(signature = (path, frames, f=None, fps=24.0, template=None, clip=None, times=None, mesh=None, max_targets=mio::SAFE_MORPH_TARGETS))]
+#[allow(clippy::too_many_arguments)]
 pub fn write_animation(
     py: Python<'_>,
     path: PathBuf,
     frames: &Bound<'_, PyAny>,
-    f: &Bound<'_, PyAny>,
+    f: Option<&Bound<'_, PyAny>>,
     fps: f64,
+    template: Option<PathBuf>,
+    clip: Option<String>,
+    times: Option<Vec<f64>>,
+    mesh: Option<String>,
+    max_targets: usize,
 ) -> PyResult<()> {
     let frames = arrays::frames("frames", frames, None)?;
+    if let Some(t) = template {
+        return crate::rig_io::write_animation_into(
+            py,
+            &path,
+            &t,
+            frames,
+            fps,
+            times,
+            clip,
+            mesh,
+            max_targets,
+        );
+    }
+    let Some(f) = f else {
+        return Err(crate::errors::new_err(
+            Kind::Mesh,
+            "f: the faces are needed unless a template asset gives them",
+        ));
+    };
     let Some(first) = frames.first() else {
         return Err(crate::errors::new_err(Kind::Mesh, "frames: no frames"));
     };

@@ -11,6 +11,7 @@ mod errors;
 mod io;
 mod mesh;
 mod metrics;
+mod rig_io;
 mod scene;
 mod synth;
 mod transfer;
@@ -27,6 +28,8 @@ fn _morphkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(io::write_morphs, m)?)?;
     m.add_function(wrap_pyfunction!(io::read_animation, m)?)?;
     m.add_function(wrap_pyfunction!(io::write_animation, m)?)?;
+    m.add_function(wrap_pyfunction!(rig_io::read_rig, m)?)?;
+    m.add_function(wrap_pyfunction!(rig_io::write_rig, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::metrics, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::continuity, m)?)?;
     m.add_function(wrap_pyfunction!(synth::flexibility, m)?)?;
