@@ -112,6 +112,21 @@ fn convert_carries_the_whole_asset() {
     let prop = d.join("prop.obj");
     ok(&["convert", "--mesh", "Prop", s(&input), s(&prop)]);
     assert_eq!(common::split::read(&prop).0.len(), 4);
+    // An output of positions and triangles says what it leaves out of the asset.
+    let (_, err) = run_ok(&["convert", "--mesh", "Body", s(&input), s(&d.join("frames"))]);
+    assert!(
+        err.contains("note:") && err.contains("1 texture") && err.contains("1 other mesh"),
+        "{err}"
+    );
+    assert!(
+        err.contains("node transform") && err.contains("UV set TEXCOORD_0"),
+        "{err}"
+    );
+    let (_, err) = run_ok(&["convert", s(&input), s(&d.join("again.glb"))]);
+    assert!(
+        !err.contains("note:"),
+        "a glTF output keeps the asset: {err}"
+    );
     let e = fails(&["convert", "--mesh", "Nope", s(&input), s(&d.join("x.glb"))]);
     assert!(
         e.contains("no mesh named 'Nope'") && e.contains("'Body'"),

@@ -281,6 +281,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         None => (None, io::read_shape_set(&inputs)?),
     };
     crate::util::warn_carried(&inputs[0], shapes.base());
+    crate::util::note_not_carried(&inputs[0], &a.out, a.mesh.as_deref());
     // An OBJ base comes back as the artist's own file: texture coordinates, normals' hard
     // edges, materials and groups kept (io::ObjTemplate).
     let template = crate::util::obj_template(&inputs[0], shapes.num_vertices())?;

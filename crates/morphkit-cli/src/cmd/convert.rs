@@ -224,6 +224,7 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
     let gltf_opts = GltfReadOptions {
         mesh: args.mesh.clone(),
     };
+    crate::util::note_not_carried(input, &out, args.mesh.as_deref());
     // A glTF input's frames, from the chosen mesh.
     let read_animation = |input: &Path| -> anyhow::Result<ShapeSet> {
         Ok(if in_gltf {

@@ -320,6 +320,74 @@ impl GltfAsset {
         &self.morphs
     }
 
+    /// What the asset holds besides the chosen mesh's positions, triangles, morph targets and
+    /// weights animations, in words (`"2 materials"`, `"UV set TEXCOORD_0"`, …): what an
+    /// output of positions and triangles only (OBJ, PLY, PC2, …) leaves out, so a command can
+    /// say so. Empty when nothing would be lost.
+    pub fn not_geometry(&self) -> Vec<String> {
+        let doc = &self.doc;
+        let count = |key: &str| doc[key].as_array().map_or(0, |a| a.len());
+        let mut out = Vec::new();
+        let mut counted = |n: usize, one: &str, many: &str| {
+            if n == 1 {
+                out.push(format!("1 {one}"));
+            } else if n > 1 {
+                out.push(format!("{n} {many}"));
+            }
+        };
+        counted(count("materials"), "material", "materials");
+        counted(count("textures"), "texture", "textures");
+        counted(count("skins"), "skin", "skins");
+        counted(count("cameras"), "camera", "cameras");
+        counted(
+            count("meshes").saturating_sub(1),
+            "other mesh",
+            "other meshes",
+        );
+        let transformed = doc["nodes"].as_array().map_or(0, |nodes| {
+            nodes
+                .iter()
+                .filter(|n| {
+                    ["translation", "rotation", "scale", "matrix"]
+                        .iter()
+                        .any(|k| n.get(k).is_some())
+                })
+                .count()
+        });
+        counted(transformed, "node transform", "node transforms");
+        let moving = doc["animations"].as_array().map_or(0, |anims| {
+            anims
+                .iter()
+                .flat_map(|a| a["channels"].as_array().into_iter().flatten())
+                .filter(|c| c["target"]["path"].as_str() != Some("weights"))
+                .count()
+        });
+        counted(moving, "node animation channel", "node animation channels");
+        let mut attributes: Vec<String> = doc["meshes"][self.mesh]["primitives"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|p| p["attributes"].as_object())
+            .flat_map(|a| a.keys().cloned())
+            .filter(|k| k != "POSITION" && k != "NORMAL")
+            .collect();
+        attributes.sort();
+        attributes.dedup();
+        out.extend(attributes.into_iter().map(|a| {
+            let what = if a.starts_with("TEXCOORD") {
+                "UV set"
+            } else if a.starts_with("COLOR") {
+                "vertex colours"
+            } else if a.starts_with("JOINTS") || a.starts_with("WEIGHTS") {
+                "skin attribute"
+            } else {
+                "attribute"
+            };
+            format!("{what} {a}")
+        }));
+        out
+    }
+
     /// The file the asset was read from.
     pub fn path(&self) -> &Path {
         &self.path
