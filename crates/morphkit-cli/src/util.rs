@@ -166,6 +166,32 @@ pub fn read_json(path: &Path, what: &str) -> anyhow::Result<serde_json::Value> {
         .map_err(|e| anyhow::anyhow!("{}: invalid JSON: {e}", path.display()))
 }
 
+/// Says on stderr what an output of positions and triangles (`output`, not glTF) leaves out of
+/// a glTF `input` (materials, textures, skins, UV sets, other meshes, …), so a user knows that
+/// a `.glb`/`.gltf` output would keep them. Nothing for other inputs or glTF outputs.
+pub fn note_not_carried(input: &Path, output: &Path, mesh: Option<&str>) {
+    use morphkit::io::{Format, GltfAsset, GltfReadOptions};
+    let gltf = |p: &Path| matches!(Format::from_path(p), Some(Format::Glb | Format::Gltf));
+    if !gltf(input) || gltf(output) {
+        return;
+    }
+    let opts = GltfReadOptions {
+        mesh: mesh.map(str::to_string),
+    };
+    let Ok(asset) = GltfAsset::read(input, &opts) else {
+        return;
+    };
+    let lost = asset.not_geometry();
+    if !lost.is_empty() {
+        eprintln!(
+            "note: {} keeps positions and triangles only; it leaves out what {} also holds: {} (a .glb or .gltf output keeps them)",
+            output.display(),
+            input.display(),
+            lost.join(", ")
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -199,31 +225,5 @@ mod tests {
         let _ = std::fs::remove_file(&p);
         let e = check_fps(1e-300).unwrap_err().to_string();
         assert!(e.starts_with("--fps 1e-300: must be at least 0.001"), "{e}");
-    }
-}
-
-/// Says on stderr what an output of positions and triangles (`output`, not glTF) leaves out of
-/// a glTF `input` (materials, textures, skins, UV sets, other meshes, …), so a user knows that
-/// a `.glb`/`.gltf` output would keep them. Nothing for other inputs or glTF outputs.
-pub fn note_not_carried(input: &Path, output: &Path, mesh: Option<&str>) {
-    use morphkit::io::{Format, GltfAsset, GltfReadOptions};
-    let gltf = |p: &Path| matches!(Format::from_path(p), Some(Format::Glb | Format::Gltf));
-    if !gltf(input) || gltf(output) {
-        return;
-    }
-    let opts = GltfReadOptions {
-        mesh: mesh.map(str::to_string),
-    };
-    let Ok(asset) = GltfAsset::read(input, &opts) else {
-        return;
-    };
-    let lost = asset.not_geometry();
-    if !lost.is_empty() {
-        eprintln!(
-            "note: {} keeps positions and triangles only; it leaves out what {} also holds: {} (a .glb or .gltf output keeps them)",
-            output.display(),
-            input.display(),
-            lost.join(", ")
-        );
     }
 }
