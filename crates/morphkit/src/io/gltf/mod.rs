@@ -67,6 +67,7 @@ mod read_chunks;
 mod split;
 mod write;
 mod write_scene;
+mod write_vertices;
 
 pub use read::{
     parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs, read_gltf_morphs_with,
@@ -99,6 +100,15 @@ pub struct GltfOptions {
     pub max_targets: usize,
     /// JSON written as `scenes[0].extras`. Default `None`.
     pub extras: Option<serde_json::Value>,
+    /// Quantize the geometry (`KHR_mesh_quantization`, listed as used and required): positions
+    /// and position deltas as normalized `i16` with the dequantizing offset and uniform scale
+    /// on the node, normals and normal deltas as normalized `i8`. Positions stay within
+    /// `√3 / 65534` (2.7e-5) of the bounding-box diagonal (see the module documentation).
+    /// Default `false`.
+    pub quantize: bool,
+    /// Store each target's `POSITION` and `NORMAL` deltas as sparse accessors listing only the
+    /// vertices that move, when that is smaller than the dense accessor. Default `false`.
+    pub sparse_targets: bool,
 }
 
 impl Default for GltfOptions {
@@ -110,6 +120,8 @@ impl Default for GltfOptions {
             material: true,
             max_targets: SAFE_MORPH_TARGETS,
             extras: None,
+            quantize: false,
+            sparse_targets: false,
         }
     }
 }

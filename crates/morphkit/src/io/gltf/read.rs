@@ -121,7 +121,9 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
 ///
 /// Positions are those of the mesh, in its own space: the transforms of the nodes using it
 /// are not applied (a quantized file, `KHR_mesh_quantization`, usually keeps its dequantizing
-/// scale and offset on the node, so its positions are in integer units).
+/// scale and offset on the node, so its positions are in integer units), except for a rig
+/// that morphkit quantized ([`super::GltfOptions::quantize`]): its mesh's
+/// `extras.morphkitDequantization` (the node's translation and uniform scale) is applied.
 pub fn parse_gltf_morphs_with(
     path: &Path,
     bytes: Vec<u8>,
@@ -187,9 +189,20 @@ pub fn parse_gltf_morphs_with(
         views: &views,
     };
     let mesh = choose_mesh(path, doc, opts)?;
-    let (base, displacements) = read_mesh(path, &mesh, &data)?;
+    let (mut base, displacements) = read_mesh(path, &mesh, &data)?;
+    // A quantized morphkit rig: positions back in their units (the node's transform).
+    let dequant = super::read_chunks::dequantization(mesh.extras());
+    if let Some(d) = dequant {
+        super::read_chunks::dequantize(d, &mut base.positions);
+    }
+    let unscale = |mut d: Vec<Vec<Point>>| {
+        if let Some((_, s)) = dequant {
+            d.iter_mut().flatten().flatten().for_each(|x| *x *= s);
+        }
+        d
+    };
     // Displacements become absolute positions in place (no second copy of every target).
-    let mut targets = displacements;
+    let mut targets = unscale(displacements);
     for d in &mut targets {
         for (q, b) in d.iter_mut().zip(&base.positions) {
             *q = [b[0] + q[0], b[1] + q[1], b[2] + q[2]];
@@ -197,7 +210,7 @@ pub fn parse_gltf_morphs_with(
     }
     if mesh.index() == 0 {
         if let Some((target_names, targets, weight_keys)) =
-            super::read_chunks::read_split(path, doc, &data, &base.positions)?
+            super::read_chunks::read_split(path, doc, &data, &base.positions, dequant)?
         {
             return Ok(GltfMorphs {
                 base,

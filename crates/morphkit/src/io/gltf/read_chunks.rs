@@ -18,15 +18,35 @@ pub(super) fn rig_indices(extras: &::gltf::json::Extras) -> Option<Vec<usize>> {
         .collect()
 }
 
+/// `extras.morphkitDequantization` of a mesh that morphkit quantized: the translation and the
+/// uniform scale of its node, `p = translation + scale · stored`.
+pub(super) fn dequantization(extras: &::gltf::json::Extras) -> Option<([f64; 3], f64)> {
+    let v: serde_json::Value = serde_json::from_str(extras.as_ref()?.get()).ok()?;
+    let d = v.get("morphkitDequantization")?;
+    let t = d.get("translation")?.as_array()?;
+    let t: Vec<f64> = t.iter().map(|x| x.as_f64()).collect::<Option<_>>()?;
+    let s = d.get("scale")?.as_f64()?;
+    let t: [f64; 3] = t.try_into().ok()?;
+    (t.iter().all(|x| x.is_finite()) && s.is_finite()).then_some((t, s))
+}
+
+/// Positions in stored units put back in their own: `translation + scale · p`.
+pub(super) fn dequantize((t, s): ([f64; 3], f64), positions: &mut [Point]) {
+    for p in positions {
+        *p = [0, 1, 2].map(|k| t[k] + s * p[k]);
+    }
+}
+
 /// The rig of a split file: names, absolute target positions and merged weight keys; `None`
 /// when mesh 0 is not part of a split rig. `base` are the base positions of mesh 0, which
-/// every part shares.
+/// every part shares, already dequantized with `dequant` (whose scale the deltas need).
 #[allow(clippy::type_complexity)]
 pub(super) fn read_split(
     path: &Path,
     doc: &::gltf::Document,
     data: &Data,
     base: &[Point],
+    dequant: Option<([f64; 3], f64)>,
 ) -> Result<Option<(Vec<String>, Vec<Vec<Point>>, Vec<(f64, Vec<f64>)>)>, IoError> {
     let parts: Vec<(::gltf::Mesh, Vec<usize>)> = doc
         .meshes()
@@ -74,11 +94,14 @@ pub(super) fn read_split(
         }
         let local_names = target_names(mesh.extras(), rig.len());
         for (j, target) in local.iter().enumerate() {
-            let d = match target.positions() {
+            let mut d = match target.positions() {
                 Some(acc) => accessor::read_vec3(&acc, data)
                     .map_err(|m| at(format!("morph target {j}: POSITION {m}")))?,
                 None => vec![[0.0; 3]; nv],
             };
+            if let Some((_, s)) = dequant {
+                d.iter_mut().flatten().for_each(|x| *x *= s);
+            }
             if d.len() != nv || d.iter().flatten().any(|x| !x.is_finite()) {
                 return Err(at(format!(
                     "morph target {j} has {} finite displacements, the base has {nv} vertices",
