@@ -88,7 +88,13 @@ fn variants(d: &Path, rig: &GltfMorphs, max_targets: usize) -> Vec<(PathBuf, u64
         ("both", true, true),
     ] {
         let p = d.join(format!("{name}.glb"));
-        io::write_gltf_with(&p, rig, &options(q, s, max_targets)).unwrap();
+        let summary = io::write_gltf_with(&p, rig, &options(q, s, max_targets)).unwrap();
+        if !q {
+            assert_eq!(
+                summary.float_position_targets + summary.float_normal_targets,
+                0
+            );
+        }
         out.push((p.clone(), std::fs::metadata(&p).unwrap().len(), q, s));
     }
     out
@@ -281,6 +287,9 @@ fn deltas_beyond_the_scale_stay_f32_and_split_windows_keep_the_dequantization() 
     let p = d.join("far.glb");
     let summary = io::write_gltf_with(&p, &rig, &options(true, true, 8)).unwrap();
     assert!(summary.meshes > 2);
+    // Every third frame flies off; translated normals do not turn.
+    assert_eq!(summary.float_position_targets, 10);
+    assert_eq!(summary.float_normal_targets, 0);
     let doc = glb(&p);
     let s = doc["meshes"][0]["extras"]["morphkitDequantization"]["scale"].clone();
     assert!(

@@ -195,6 +195,13 @@ pub struct GltfSummary {
     /// Things a viewer may not play, in words (a mesh above [`GltfOptions::max_targets`] that
     /// could not be split).
     pub warnings: Vec<String>,
+    /// With [`GltfOptions::quantize`]: targets whose position deltas did not fit the 16-bit
+    /// range (moving farther than the mesh's size) and stayed `f32`.
+    pub float_position_targets: usize,
+    /// With [`GltfOptions::quantize`]: targets whose normal deltas did not fit 8 bits (some
+    /// normal turns so far that a component changes by more than 1, common where limbs rotate
+    /// by 90° or more) and stayed `f32`.
+    pub float_normal_targets: usize,
 }
 
 /// Weight rows of `keys` restricted to `targets`, as `f32`, for keys `k0..=k1`.
@@ -258,6 +265,8 @@ pub(super) fn build_with(
     let mut b = Builder::default();
     // Accessor order: POSITION 0, indices 1, NORMAL 2, then the targets.
     let vertices = write_vertices::write(path, m, opts, &mut b)?;
+    summary.float_position_targets = vertices.float_positions;
+    summary.float_normal_targets = vertices.float_normals;
     let (pos, indices, normal, targets) = (
         vertices.position,
         vertices.indices,

@@ -58,6 +58,9 @@ pub(super) struct Vertices {
     pub targets: Vec<Value>,
     /// The node transform quantized positions need.
     pub dequant: Option<Dequant>,
+    /// Quantized: targets whose position deltas, and whose normal deltas, stayed `f32`.
+    pub float_positions: usize,
+    pub float_normals: usize,
 }
 
 /// One VEC3 attribute or delta stream in its stored type.
@@ -348,6 +351,7 @@ pub(super) fn write(
     let unit = dq.map_or(1.0, |d| d.scale as f64);
     let pos_eps = SPARSE_EPS * diag / unit;
     let mut targets = Vec::with_capacity(m.targets.len());
+    let (mut float_positions, mut float_normals) = (0, 0);
     for tp in &m.targets {
         let dp = match (&dq, &qbase) {
             (Some(d), Some(qb)) => {
@@ -380,6 +384,9 @@ pub(super) fn write(
                 Some(&m.base.positions),
             )?),
         };
+        if opts.quantize && matches!(dp, Stream::F32(_)) {
+            float_positions += 1;
+        }
         let mut target = json!({"POSITION": b.stream(&dp, true, sparse(pos_eps))});
         if let Some(n0) = &base_normals {
             let n = vertex_normals(tp, &m.base.triangles);
@@ -393,6 +400,9 @@ pub(super) fn write(
                         .collect(),
                 ),
             };
+            if opts.quantize && matches!(dn, Stream::F32(_)) {
+                float_normals += 1;
+            }
             target["NORMAL"] = json!(b.stream(&dn, false, sparse(SPARSE_EPS)));
         }
         targets.push(target);
@@ -403,5 +413,7 @@ pub(super) fn write(
         normal,
         targets,
         dequant: dq,
+        float_positions,
+        float_normals,
     })
 }
