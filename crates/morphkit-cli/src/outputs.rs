@@ -213,22 +213,24 @@ impl Outputs {
             .write(path, false, |tmp| io::write_mesh(tmp, mesh))?)
     }
 
-    /// Stages one mesh; an `.obj`/`.obj.gz` with a `template` (the input's own OBJ) is that
-    /// file with the mesh's positions and recomputed normals, every other record kept.
+    /// Stages one mesh; an output of the `template`'s format (the input's own OBJ or PLY) is
+    /// that file with the mesh's positions and recomputed normals, every other record kept.
     pub fn mesh_like(
         &mut self,
         path: &Path,
         mesh: &TriMesh,
-        template: Option<&io::ObjTemplate>,
+        template: Option<&io::MeshTemplate>,
     ) -> anyhow::Result<()> {
-        match (template, Format::from_path(path)) {
-            (Some(t), Some(Format::Obj { gzip })) => {
-                Ok(self
-                    .staging
-                    .write(path, false, |tmp| t.write(tmp, &mesh.positions, gzip))?)
+        let Some(t) = template else {
+            return self.mesh(path, mesh);
+        };
+        // The staged file's name ends with the destination's, so it has the same format.
+        Ok(self.staging.write(path, false, |tmp| {
+            if !t.write_if_same_format(tmp, &mesh.positions)? {
+                io::write_mesh(tmp, mesh)?;
             }
-            _ => self.mesh(path, mesh),
-        }
+            Ok(())
+        })?)
     }
 
     /// Stages a binary PLY with colours.
@@ -332,9 +334,10 @@ impl Outputs {
         dir: bool,
         base: &TriMesh,
         frames: usize,
-        template: Option<io::ObjTemplate>,
+        template: Option<io::MeshTemplate>,
     ) -> anyhow::Result<io::FrameStream> {
         let tmp = self.staging.stage(path, dir)?;
+        let template = template.and_then(io::MeshTemplate::into_obj);
         Ok(io::FrameStream::create(&tmp, path, dir, base, frames)?.with_obj_template(template))
     }
 

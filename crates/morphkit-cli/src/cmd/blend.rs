@@ -245,9 +245,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     crate::util::announce_reading(&inputs);
     let shapes = io::read_shape_set(&inputs)?;
     crate::util::warn_carried(&inputs[0], shapes.base());
-    // An OBJ base comes back as the artist's own file: texture coordinates, normals' hard
-    // edges, materials and groups kept (io::ObjTemplate).
-    let template = crate::util::obj_template(&inputs[0], shapes.num_vertices())?;
+    // An OBJ or PLY base comes back as the artist's own file: texture coordinates, normals'
+    // hard edges, materials, groups, colours and custom properties kept (io::MeshTemplate).
+    let template = crate::util::template(&inputs[0], shapes.num_vertices())?;
     let weights = frame_weights(a, shapes.len())?;
     for (k, w) in weights.iter().enumerate() {
         w.coefficients(shapes.len())

@@ -137,7 +137,7 @@ fn write_mesh(
     mut outputs: Outputs,
     out: &Path,
     mesh: &TriMesh,
-    template: Option<&io::ObjTemplate>,
+    template: Option<&io::MeshTemplate>,
 ) -> anyhow::Result<()> {
     outputs.mesh_like(out, mesh, template)?;
     outputs.commit()?;
@@ -270,8 +270,8 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         );
     }
     let mesh = io::read_mesh(input)?;
-    // OBJ to OBJ keeps the artist's records (io::ObjTemplate).
-    let template = crate::util::obj_template(input, mesh.num_vertices())?;
+    // OBJ to OBJ and PLY to PLY keep the artist's records (io::MeshTemplate).
+    let template = crate::util::template(input, mesh.num_vertices())?;
     write_mesh(outputs, &out, &mesh, template.as_ref())
 }
 
