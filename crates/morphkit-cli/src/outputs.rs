@@ -221,16 +221,13 @@ impl Outputs {
         mesh: &TriMesh,
         template: Option<&io::MeshTemplate>,
     ) -> anyhow::Result<()> {
-        let Some(t) = template else {
-            return self.mesh(path, mesh);
-        };
-        // The staged file's name ends with the destination's, so it has the same format.
-        Ok(self.staging.write(path, false, |tmp| {
-            if !t.write_if_same_format(tmp, &mesh.positions)? {
-                io::write_mesh(tmp, mesh)?;
-            }
-            Ok(())
-        })?)
+        match template {
+            // The staged file's name ends with the destination's, so it has the same format.
+            Some(t) if t.fits(path) => Ok(self
+                .staging
+                .write(path, false, |tmp| t.write(tmp, &mesh.positions))?),
+            _ => self.mesh(path, mesh),
+        }
     }
 
     /// Stages a binary PLY with colours.

@@ -71,8 +71,8 @@ use std::path::Path;
 pub enum MeshTemplate {
     /// An `.obj` / `.obj.gz`.
     Obj(ObjTemplate),
-    /// A `.ply`.
-    Ply(PlyTemplate),
+    /// A `.ply` (boxed: it holds the file's parsed header beside its bytes).
+    Ply(Box<PlyTemplate>),
 }
 
 impl MeshTemplate {
@@ -80,7 +80,7 @@ impl MeshTemplate {
     pub fn read(path: &Path) -> Result<Option<Self>, IoError> {
         Ok(match Format::from_path(path) {
             Some(Format::Obj { .. }) => Some(Self::Obj(ObjTemplate::read(path)?)),
-            Some(Format::Ply) => Some(Self::Ply(PlyTemplate::read(path)?)),
+            Some(Format::Ply) => Some(Self::Ply(Box::new(PlyTemplate::read(path)?))),
             _ => None,
         })
     }
@@ -101,16 +101,30 @@ impl MeshTemplate {
         }
     }
 
-    /// Writes `positions` into the template at `out` when `out` has the template's format
-    /// (`.obj`/`.obj.gz` for an OBJ, `.ply` for a PLY) and returns `true`; else writes nothing
-    /// and returns `false`.
-    pub fn write_if_same_format(&self, out: &Path, positions: &[Point]) -> Result<bool, IoError> {
+    /// Whether an output at `out` is written into the template: it has the template's format
+    /// (`.obj`/`.obj.gz` for an OBJ, `.ply` for a PLY).
+    pub fn fits(&self, out: &Path) -> bool {
+        matches!(
+            (self, Format::from_path(out)),
+            (Self::Obj(_), Some(Format::Obj { .. })) | (Self::Ply(_), Some(Format::Ply))
+        )
+    }
+
+    /// Writes `positions` into the template at `out`, atomically; an `out` the template does
+    /// not [fit](MeshTemplate::fits) is an [`IoError::UnknownFormat`] error.
+    pub fn write(&self, out: &Path, positions: &[Point]) -> Result<(), IoError> {
         match (self, Format::from_path(out)) {
-            (Self::Obj(t), Some(Format::Obj { gzip })) => t.write(out, positions, gzip)?,
-            (Self::Ply(t), Some(Format::Ply)) => t.write(out, positions)?,
-            _ => return Ok(false),
+            (Self::Obj(t), Some(Format::Obj { gzip })) => t.write(out, positions, gzip),
+            (Self::Ply(t), Some(Format::Ply)) => t.write(out, positions),
+            (Self::Obj(_), _) => Err(IoError::UnknownFormat {
+                path: out.to_path_buf(),
+                expected: ".obj or .obj.gz, the template's format",
+            }),
+            (Self::Ply(_), _) => Err(IoError::UnknownFormat {
+                path: out.to_path_buf(),
+                expected: ".ply, the template's format",
+            }),
         }
-        Ok(true)
     }
 }
 
