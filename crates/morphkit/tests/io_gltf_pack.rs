@@ -367,3 +367,29 @@ fn quantized_and_sparse_files_pass_the_khronos_validator() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn a_requantized_file_keeping_the_extras_is_not_dequantized_twice() {
+    let d = tmp_dir("requantized");
+    let rig = io::frames_to_gltf(&tube_frames(4, 1.0), 24.0);
+    let p = d.join("q.gltf");
+    io::write_gltf_with(&p, &rig, &options(true, false, 0)).unwrap();
+    let back = io::read_gltf_morphs(&p).unwrap();
+    assert!(rig_error(&back, &rig) < 2.7e-5);
+    // Another tool moved the dequantization (its own node transform), keeping the extras.
+    let mut doc: Value = serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+    doc["nodes"][0]["scale"] = serde_json::json!([1.0, 1.0, 1.0]);
+    std::fs::write(&p, doc.to_string()).unwrap();
+    let back = io::read_gltf_morphs(&p).unwrap();
+    let largest = back
+        .base
+        .positions
+        .iter()
+        .flatten()
+        .fold(0.0f64, |a, x| a.max(x.abs()));
+    assert!(
+        largest <= 1.0,
+        "stored units, as other quantized files: {largest}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

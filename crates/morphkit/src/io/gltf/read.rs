@@ -191,7 +191,7 @@ pub fn parse_gltf_morphs_with(
     let mesh = choose_mesh(path, doc, opts)?;
     let (mut base, displacements) = read_mesh(path, &mesh, &data)?;
     // A quantized morphkit rig: positions back in their units (the node's transform).
-    let dequant = super::read_chunks::dequantization(mesh.extras());
+    let dequant = super::read_chunks::dequantization(doc, &mesh);
     if let Some(d) = dequant {
         super::read_chunks::dequantize(d, &mut base.positions);
     }

@@ -19,15 +19,33 @@ pub(super) fn rig_indices(extras: &::gltf::json::Extras) -> Option<Vec<usize>> {
 }
 
 /// `extras.morphkitDequantization` of a mesh that morphkit quantized: the translation and the
-/// uniform scale of its node, `p = translation + scale · stored`.
-pub(super) fn dequantization(extras: &::gltf::json::Extras) -> Option<([f64; 3], f64)> {
-    let v: serde_json::Value = serde_json::from_str(extras.as_ref()?.get()).ok()?;
+/// uniform scale of its node, `p = translation + scale · stored`. Taken only while a node
+/// using the mesh still has that translation and that scale (or 0, a hidden window) and no
+/// rotation, so that a file a tool re-quantized (keeping extras) is not dequantized twice.
+pub(super) fn dequantization(
+    doc: &::gltf::Document,
+    mesh: &::gltf::Mesh,
+) -> Option<([f64; 3], f64)> {
+    let v: serde_json::Value = serde_json::from_str(mesh.extras().as_ref()?.get()).ok()?;
     let d = v.get("morphkitDequantization")?;
     let t = d.get("translation")?.as_array()?;
     let t: Vec<f64> = t.iter().map(|x| x.as_f64()).collect::<Option<_>>()?;
     let s = d.get("scale")?.as_f64()?;
     let t: [f64; 3] = t.try_into().ok()?;
-    (t.iter().all(|x| x.is_finite()) && s.is_finite()).then_some((t, s))
+    if !(t.iter().all(|x| x.is_finite()) && s.is_finite()) {
+        return None;
+    }
+    let on_node = doc
+        .nodes()
+        .filter(|n| n.mesh().is_some_and(|m| m.index() == mesh.index()))
+        .any(|n| {
+            let (nt, nr, ns) = n.transform().decomposed();
+            let same = |a: f32, b: f64| a == b as f32;
+            (0..3).all(|k| same(nt[k], t[k]))
+                && nr == [0.0, 0.0, 0.0, 1.0]
+                && (ns.iter().all(|&x| same(x, s)) || ns == [0.0; 3])
+        });
+    on_node.then_some((t, s))
 }
 
 /// Positions in stored units put back in their own: `translation + scale · p`.
