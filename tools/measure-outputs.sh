@@ -3,7 +3,8 @@
 #
 # Usage: tools/measure-outputs.sh MORPHKIT_BINARY DATA_DIR OUT_DIR [OLD_MORPHKIT_BINARY]
 # Writes a 10-frame camel (horse-01…10 transferred onto the camel) and a 2 100-frame linear
-# blend of the 420-vertex cragl tube as GLB (with and without normals), PC2 and USDA, and, with
+# blend of the 420-vertex cragl tube as GLB (with and without normals, with --sparse-targets,
+# --quantize and both), PC2 and USDA, and, with
 # OLD_MORPHKIT_BINARY, the GLB of an older build for comparison; prints their sizes, then the
 # three.js load times (tools/threejs-check, best of 3) and, when blender is on PATH, the
 # Blender import times (tools/blender-check).
@@ -21,6 +22,9 @@ for n in camel10 tube2100; do
   [ -n "$old" ] && "$old" convert "$n" "$n-old.glb" 2>/dev/null
   "$bin" convert "$n" "$n.glb" 2>/dev/null
   "$bin" convert "$n" --no-normals "$n-no-normals.glb" 2>/dev/null
+  "$bin" convert "$n" --sparse-targets "$n-sparse.glb" 2>/dev/null
+  "$bin" convert "$n" --quantize "$n-quantized.glb" 2>/dev/null
+  "$bin" convert "$n" --quantize --sparse-targets "$n-packed.glb" 2>/dev/null
   "$bin" convert "$n" "$n.pc2" 2>/dev/null
   "$bin" convert "$n" "$n.usda" 2>/dev/null
 done
@@ -28,9 +32,13 @@ ls -l ./*.glb ./*.pc2 ./*.usda | awk '{printf "%12d  %s\n", $5, $9}'
 (cd "$here/threejs-check" && npm ci --no-audit --no-fund --loglevel=error)
 for g in ./*.glb; do
   frames="${g%.glb}"; frames="${frames%-old}"; frames="${frames%-no-normals}"
+  frames="${frames%-sparse}"; frames="${frames%-quantized}"; frames="${frames%-packed}"
+  # Quantized files are within 2.7e-5 of the diagonal, not the default 1e-6.
+  tol=1e-6
+  case "$g" in *-quantized.glb|*-packed.glb) tol=1e-4 ;; esac
   best=""
   for _ in 1 2 3; do
-    t=$(node "$here/threejs-check/check.mjs" "$g" "$frames" | node -e \
+    t=$(node "$here/threejs-check/check.mjs" --tol "$tol" "$g" "$frames" | node -e \
       'let s="";process.stdin.on("data",d=>s+=d).on("end",()=>{const r=JSON.parse(s);console.log(Math.round(r.loadMs)+(r.ok?"":" (does not play: "+r.problems[0]+")"))})' || true)
     best="$best $t"
   done

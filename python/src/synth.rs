@@ -230,8 +230,8 @@ pub fn synthesize<'py>(
             let built = RecipeFile::read(&recipe)
                 .and_then(|rf| rf.build())
                 .map_err(|e| (Kind::File, chain(&e)))?;
+            // In the target's own layout (the synthesizer solves on the welded target).
             let frames = built
-                .synthesizer
                 .frames()
                 .map(|r| r.map(|f| f.positions))
                 .collect::<Result<Vec<_>, _>>()

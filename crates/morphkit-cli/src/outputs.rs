@@ -35,6 +35,29 @@ pub struct OutputFlags {
     /// Leave vertex normals and normal deltas out of .glb/.gltf output (smaller, shades flat).
     #[arg(long, global = true)]
     pub no_normals: bool,
+    /// Quantize .glb/.gltf output (KHR_mesh_quantization, which viewers must support):
+    /// positions and morph deltas as 16-bit integers scaled by the node (within 2.7e-5 of the
+    /// bounding-box diagonal), normals and normal deltas as 8-bit integers. About half the size.
+    #[arg(long, global = true)]
+    pub quantize: bool,
+    /// Store each morph target of .glb/.gltf output as a sparse accessor listing only the
+    /// vertices that move (when that is smaller): for shapes that move part of the mesh.
+    #[arg(long, global = true)]
+    pub sparse_targets: bool,
+}
+
+impl OutputFlags {
+    /// `opts` with these flags applied.
+    fn apply(&self, opts: &mut GltfOptions) {
+        if let Some(n) = self.max_targets {
+            opts.max_targets = n;
+        }
+        if self.no_normals {
+            opts.normals = false;
+        }
+        opts.quantize |= self.quantize;
+        opts.sparse_targets |= self.sparse_targets;
+    }
 }
 
 /// What every output of this run is stamped with: the flags, the subcommand and the command
@@ -136,12 +159,7 @@ pub fn frames_options(opts: &FramesOptions, frames: usize) -> FramesOptions {
     if o.usd.name == io::UsdOptions::default().name {
         o.usd.name = name;
     }
-    if let Some(n) = ctx.flags.max_targets {
-        o.gltf.max_targets = n;
-    }
-    if ctx.flags.no_normals {
-        o.gltf.normals = false;
-    }
+    ctx.flags.apply(&mut o.gltf);
     let mut extras = match o.gltf.extras.take() {
         Some(serde_json::Value::Object(m)) => m,
         Some(other) => {
@@ -185,27 +203,39 @@ pub struct Outputs {
 }
 
 impl Outputs {
-    /// Stages one mesh (format by extension).
+    /// Stages one mesh (format by extension; a .glb/.gltf with the output flags).
     pub fn mesh(&mut self, path: &Path, mesh: &TriMesh) -> anyhow::Result<()> {
+        let mut opts = GltfOptions::default();
+        context().flags.apply(&mut opts);
+        if opts != GltfOptions::default()
+            && matches!(Format::from_path(path), Some(Format::Glb | Format::Gltf))
+        {
+            let rig = GltfMorphs {
+                base: mesh.clone(),
+                ..GltfMorphs::default()
+            };
+            return Ok(self.staging.write(path, false, |tmp| {
+                io::write_gltf_with(tmp, &rig, &opts).map(|_| ())
+            })?);
+        }
         Ok(self
             .staging
             .write(path, false, |tmp| io::write_mesh(tmp, mesh))?)
     }
 
-    /// Stages one mesh; an `.obj`/`.obj.gz` with a `template` (the input's own OBJ) is that
-    /// file with the mesh's positions and recomputed normals, every other record kept.
+    /// Stages one mesh; an output of the `template`'s format (the input's own OBJ or PLY) is
+    /// that file with the mesh's positions and recomputed normals, every other record kept.
     pub fn mesh_like(
         &mut self,
         path: &Path,
         mesh: &TriMesh,
-        template: Option<&io::ObjTemplate>,
+        template: Option<&io::MeshTemplate>,
     ) -> anyhow::Result<()> {
-        match (template, Format::from_path(path)) {
-            (Some(t), Some(Format::Obj { gzip })) => {
-                Ok(self
-                    .staging
-                    .write(path, false, |tmp| t.write(tmp, &mesh.positions, gzip))?)
-            }
+        match template {
+            // The staged file's name ends with the destination's, so it has the same format.
+            Some(t) if t.fits(path) => Ok(self
+                .staging
+                .write(path, false, |tmp| t.write(tmp, &mesh.positions))?),
             _ => self.mesh(path, mesh),
         }
     }
@@ -335,9 +365,10 @@ impl Outputs {
         dir: bool,
         base: &TriMesh,
         frames: usize,
-        template: Option<io::ObjTemplate>,
+        template: Option<io::MeshTemplate>,
     ) -> anyhow::Result<io::FrameStream> {
         let tmp = self.staging.stage(path, dir)?;
+        let template = template.and_then(io::MeshTemplate::into_obj);
         Ok(io::FrameStream::create(&tmp, path, dir, base, frames)?.with_obj_template(template))
     }
 
@@ -375,6 +406,17 @@ impl Outputs {
 pub fn report_gltf(path: &Path, summary: &io::GltfSummary, opts: &GltfOptions) {
     for w in &summary.warnings {
         eprintln!("warning: {}: {w}", path.display());
+    }
+    if summary.float_position_targets + summary.float_normal_targets > 0 {
+        eprintln!(
+            "note: {}: of {} quantized morph targets, {} keep f32 position deltas (they move \
+             farther than the mesh's size) and {} keep f32 normal deltas (normals turn too far for \
+             8 bits); --no-normals leaves normals out",
+            path.display(),
+            summary.targets,
+            summary.float_position_targets,
+            summary.float_normal_targets
+        );
     }
     if summary.meshes > 1 {
         eprintln!(

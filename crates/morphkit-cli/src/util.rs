@@ -49,8 +49,19 @@ pub fn warn_carried(path: &Path, mesh: &morphkit::TriMesh) {
     }
 }
 
-/// The input `path` as an [`morphkit::io::ObjTemplate`] for outputs, when it is an OBJ of
-/// `vertices` vertices (results keep the input's layout).
+/// The input `path` as an [`morphkit::io::MeshTemplate`] for outputs, when it is an OBJ or a
+/// PLY of `vertices` vertices (results keep the input's layout): outputs of its format are
+/// written into the artist's own file.
+pub fn template(
+    path: &Path,
+    vertices: usize,
+) -> anyhow::Result<Option<morphkit::io::MeshTemplate>> {
+    let t = morphkit::io::MeshTemplate::read(path)?;
+    Ok(t.filter(|t| t.num_vertices() == vertices))
+}
+
+/// The input `path` as an [`morphkit::io::ObjTemplate`] (what frame directories are written
+/// into), when it is an OBJ of `vertices` vertices.
 pub fn obj_template(
     path: &Path,
     vertices: usize,
@@ -61,8 +72,7 @@ pub fn obj_template(
     ) {
         return Ok(None);
     }
-    let t = morphkit::io::ObjTemplate::read(path)?;
-    Ok((t.num_vertices() == vertices).then_some(t))
+    Ok(template(path, vertices)?.and_then(morphkit::io::MeshTemplate::into_obj))
 }
 
 /// Prints `reading N files (X MiB)…` on stderr before reading inputs that are large, so a

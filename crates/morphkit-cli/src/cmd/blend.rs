@@ -281,10 +281,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         None => (None, io::read_shape_set(&inputs)?),
     };
     crate::util::warn_carried(&inputs[0], shapes.base());
-    crate::util::note_not_carried(&inputs[0], &a.out, a.mesh.as_deref());
-    // An OBJ base comes back as the artist's own file: texture coordinates, normals' hard
-    // edges, materials and groups kept (io::ObjTemplate).
-    let template = crate::util::obj_template(&inputs[0], shapes.num_vertices())?;
+    // An OBJ or PLY base comes back as the artist's own file: texture coordinates, normals'
+    // hard edges, materials, groups, colours and custom properties kept (io::MeshTemplate).
+    let template = crate::util::template(&inputs[0], shapes.num_vertices())?;
     let weights = match &rig {
         Some(r) => r.weights.clone(),
         None => frame_weights(a, shapes.len())?,
@@ -514,5 +513,6 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     }
     outputs.commit()?;
     eprintln!("wrote {} frame(s) to {}", weights.len(), a.out.display());
+    crate::util::note_not_carried(&inputs[0], &a.out, a.mesh.as_deref());
     Ok(())
 }

@@ -143,7 +143,7 @@ fn write_mesh(
     mut outputs: Outputs,
     out: &Path,
     mesh: &TriMesh,
-    template: Option<&io::ObjTemplate>,
+    template: Option<&io::MeshTemplate>,
 ) -> anyhow::Result<()> {
     outputs.mesh_like(out, mesh, template)?;
     outputs.commit()?;
@@ -158,6 +158,15 @@ fn write_mesh(
 
 /// Runs `morphkit convert`.
 pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
+    convert(args)?;
+    // After the output is written: what a positions-and-faces output left out of a glTF.
+    if let [input, out] = args.paths.as_slice() {
+        crate::util::note_not_carried(Path::new(input), Path::new(out), args.mesh.as_deref());
+    }
+    Ok(())
+}
+
+fn convert(args: &ConvertArgs) -> anyhow::Result<()> {
     let (out, ins) = match args.paths.split_last() {
         Some((out, ins)) if !ins.is_empty() => (out, ins),
         _ => bail!("give at least one input and an output (morphkit convert IN... OUT)"),
@@ -224,7 +233,6 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
     let gltf_opts = GltfReadOptions {
         mesh: args.mesh.clone(),
     };
-    crate::util::note_not_carried(input, &out, args.mesh.as_deref());
     // A glTF input's frames, from the chosen mesh.
     let read_animation = |input: &Path| -> anyhow::Result<ShapeSet> {
         Ok(if in_gltf {
@@ -305,8 +313,8 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         );
     }
     let mesh = io::read_mesh(input)?;
-    // OBJ to OBJ keeps the artist's records (io::ObjTemplate).
-    let template = crate::util::obj_template(input, mesh.num_vertices())?;
+    // OBJ to OBJ and PLY to PLY keep the artist's records (io::MeshTemplate).
+    let template = crate::util::template(input, mesh.num_vertices())?;
     write_mesh(outputs, &out, &mesh, template.as_ref())
 }
 

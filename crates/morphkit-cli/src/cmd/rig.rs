@@ -263,8 +263,8 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
         }));
         targets.push(x);
     }
-    // An OBJ target's shapes come back as the artist's own file (io::ObjTemplate).
-    let template = crate::util::obj_template(&args.target, input_target.num_vertices())?;
+    // An OBJ or PLY target's shapes come back as the artist's own file (io::MeshTemplate).
+    let template = crate::util::template(&args.target, input_target.num_vertices())?;
     for (p, x) in shape_paths.iter().zip(&targets) {
         outputs.mesh_like(
             p,

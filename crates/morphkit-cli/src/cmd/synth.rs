@@ -75,6 +75,9 @@ pub fn run(args: &SynthArgs) -> anyhow::Result<()> {
     let built = rf.build()?;
     let build_s = t0.elapsed().as_secs_f64();
     let s = &built.synthesizer;
+    // Split seams and hard edges are one vertex for the solve (mesh::weld); frames come back
+    // in the target's own layout.
+    super::weld_util::announce(&built.weld, "the target");
     let selection = args
         .selection
         .clone()
@@ -130,11 +133,13 @@ pub fn run(args: &SynthArgs) -> anyhow::Result<()> {
     let (mut blend_t, mut solve_t, mut worst) = (0.0f64, 0.0f64, 0.0f64);
     let mut flips = Vec::with_capacity(s.num_frames());
     for f in 0..s.num_frames() {
-        let fr = s.frame(f).with_context(|| format!("output frame {f}"))?;
+        let fr = built
+            .frame(f)
+            .with_context(|| format!("output frame {f}"))?;
         blend_t += fr.blend_seconds;
         solve_t += fr.solve_seconds;
         worst = worst.max(fr.blend_seconds + fr.solve_seconds);
-        flips.push(s.flipped_triangles(&fr).len());
+        flips.push(built.flipped_triangles(&fr).len());
         out.push((format!("frame_{f:04}"), fr.positions));
         pb.inc(1);
     }
@@ -180,6 +185,10 @@ pub fn run(args: &SynthArgs) -> anyhow::Result<()> {
                 "target_vertices": built.target.num_vertices(),
                 "target_triangles": built.target.num_triangles(),
                 "follow_layer": s.follow_layer(),
+                "welded_vertices": {
+                    "target": built.weld.merged(),
+                    "sources": built.source_welded_vertices,
+                },
                 "layers": layers,
                 "timings": {
                     "build_s": build_s,

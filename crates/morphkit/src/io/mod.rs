@@ -3,7 +3,7 @@
 //! | format | read | write | notes |
 //! |---|---|---|---|
 //! | OBJ | [`obj`] | [`obj`] | `v`/`f` only, polygons kept, full `f64` precision; `.obj.gz` both ways |
-//! | PLY | [`ply`] | [`ply`] | ascii and binary; written binary little endian, optionally coloured |
+//! | PLY | [`ply`] | [`ply`] | ascii and binary; written binary little endian, optionally coloured; results of a PLY input written into it ([`PlyTemplate`]) |
 //! | OFF | [`off`] | [`off`] | |
 //! | glTF / GLB | [`gltf`] | [`gltf`] | the mesh with morph targets (or the first; choose by name with [`GltfReadOptions`]); quantized, meshopt and sparse accessors; morph-weight animations; a user's whole asset edited in place with [`GltfAsset`] |
 //! | PC2 | [`pc2`] | [`pc2`] | positions only; connectivity from a reference mesh |
@@ -28,6 +28,7 @@ mod obj_template;
 pub mod off;
 pub mod pc2;
 pub mod ply;
+mod ply_template;
 mod sequence;
 mod source;
 mod staging;
@@ -48,6 +49,7 @@ pub use gltf::{
 };
 pub use obj_template::ObjTemplate;
 pub use ply::{write_ply_colored, PlyEncoding};
+pub use ply_template::PlyTemplate;
 pub use sequence::{
     frames_to_gltf, gltf_to_frames, obj_files, read_animation, read_shape_set, read_shape_set_with,
     shape_name, write_frames, write_frames_with, FramesOptions,
@@ -63,8 +65,71 @@ pub use weights::{
     parse_named_weights, parse_weights, read_named_weights, read_weights, WeightRow,
 };
 
-use crate::mesh::{validate, TriMesh, ValidationReport};
+use crate::mesh::{validate, Point, TriMesh, ValidationReport};
 use std::path::Path;
+
+/// An input's own file that results are written into, every other record kept: an OBJ
+/// ([`ObjTemplate`]) or a PLY ([`PlyTemplate`]).
+#[derive(Clone, Debug)]
+pub enum MeshTemplate {
+    /// An `.obj` / `.obj.gz`.
+    Obj(ObjTemplate),
+    /// A `.ply` (boxed: it holds the file's parsed header beside its bytes).
+    Ply(Box<PlyTemplate>),
+}
+
+impl MeshTemplate {
+    /// `path` as a template when it is an OBJ or a PLY (by extension), else `None`.
+    pub fn read(path: &Path) -> Result<Option<Self>, IoError> {
+        Ok(match Format::from_path(path) {
+            Some(Format::Obj { .. }) => Some(Self::Obj(ObjTemplate::read(path)?)),
+            Some(Format::Ply) => Some(Self::Ply(Box::new(PlyTemplate::read(path)?))),
+            _ => None,
+        })
+    }
+
+    /// The number of vertices the template holds.
+    pub fn num_vertices(&self) -> usize {
+        match self {
+            Self::Obj(t) => t.num_vertices(),
+            Self::Ply(t) => t.num_vertices(),
+        }
+    }
+
+    /// The OBJ template (what frame directories, made of OBJ files, are written into).
+    pub fn into_obj(self) -> Option<ObjTemplate> {
+        match self {
+            Self::Obj(t) => Some(t),
+            Self::Ply(_) => None,
+        }
+    }
+
+    /// Whether an output at `out` is written into the template: it has the template's format
+    /// (`.obj`/`.obj.gz` for an OBJ, `.ply` for a PLY).
+    pub fn fits(&self, out: &Path) -> bool {
+        matches!(
+            (self, Format::from_path(out)),
+            (Self::Obj(_), Some(Format::Obj { .. })) | (Self::Ply(_), Some(Format::Ply))
+        )
+    }
+
+    /// Writes `positions` into the template at `out`, atomically; an `out` the template does
+    /// not [fit](MeshTemplate::fits) is an [`IoError::UnknownFormat`] error.
+    pub fn write(&self, out: &Path, positions: &[Point]) -> Result<(), IoError> {
+        match (self, Format::from_path(out)) {
+            (Self::Obj(t), Some(Format::Obj { gzip })) => t.write(out, positions, gzip),
+            (Self::Ply(t), Some(Format::Ply)) => t.write(out, positions),
+            (Self::Obj(_), _) => Err(IoError::UnknownFormat {
+                path: out.to_path_buf(),
+                expected: ".obj or .obj.gz, the template's format",
+            }),
+            (Self::Ply(_), _) => Err(IoError::UnknownFormat {
+                path: out.to_path_buf(),
+                expected: ".ply, the template's format",
+            }),
+        }
+    }
+}
 
 const MESH_FORMATS: &str = ".obj, .obj.gz, .ply, .off, .gltf, .glb or .usda";
 

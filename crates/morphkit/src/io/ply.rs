@@ -28,7 +28,7 @@ pub enum PlyEncoding {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Scalar {
+pub(super) enum Scalar {
     I8,
     U8,
     I16,
@@ -53,7 +53,7 @@ impl Scalar {
             _ => return None,
         })
     }
-    fn size(self) -> usize {
+    pub(super) fn size(self) -> usize {
         match self {
             Scalar::I8 | Scalar::U8 => 1,
             Scalar::I16 | Scalar::U16 => 2,
@@ -63,35 +63,35 @@ impl Scalar {
     }
 }
 
-#[derive(Debug)]
-enum Kind {
+#[derive(Clone, Debug)]
+pub(super) enum Kind {
     Scalar(Scalar),
     List { count: Scalar, item: Scalar },
 }
 
-#[derive(Debug)]
-struct Property {
-    name: String,
-    kind: Kind,
+#[derive(Clone, Debug)]
+pub(super) struct Property {
+    pub(super) name: String,
+    pub(super) kind: Kind,
 }
 
-#[derive(Debug)]
-struct Element {
-    name: String,
-    count: usize,
-    props: Vec<Property>,
+#[derive(Clone, Debug)]
+pub(super) struct Element {
+    pub(super) name: String,
+    pub(super) count: usize,
+    pub(super) props: Vec<Property>,
 }
 
-struct Header {
-    encoding: PlyEncoding,
-    elements: Vec<Element>,
+pub(super) struct Header {
+    pub(super) encoding: PlyEncoding,
+    pub(super) elements: Vec<Element>,
     /// Byte offset of the body.
-    body: usize,
+    pub(super) body: usize,
     /// Number of header lines (body line numbers follow).
     lines: usize,
 }
 
-fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, IoError> {
+pub(super) fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, IoError> {
     let mut pos = 0;
     let mut line_no = 0;
     let mut encoding = None;

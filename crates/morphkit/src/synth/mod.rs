@@ -27,6 +27,7 @@ pub mod partitions;
 pub mod pose;
 pub mod recipe;
 pub mod recipe_build;
+pub mod recipe_weld;
 pub mod scribble;
 pub mod synthesizer;
 pub mod weights;

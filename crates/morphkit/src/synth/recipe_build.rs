@@ -8,12 +8,13 @@
 //! two layers with the same source reference and markers share one correspondence.
 
 use super::recipe::{PathList, RecipeError, RecipeFile, RegionKind, TranslationKind};
+use super::recipe_weld::{weld_keeping_triangles, welded_correspondence, welded_markers};
 use super::{
-    BlendMode, BlendRegion, LayerSpec, PoseSpec, Scribble, SynthError, SynthOptions, Synthesizer,
-    Timing,
+    BlendMode, BlendRegion, LayerSpec, PoseSpec, Scribble, SynthError, SynthFrame, SynthOptions,
+    Synthesizer, Timing,
 };
 use crate::io::{self, Format};
-use crate::mesh::{ShapeSet, TriMesh};
+use crate::mesh::{Point, ShapeSet, TriMesh, Weld};
 use crate::transfer::{
     correspond, Correspondence, CorrespondenceOptions, Markers, TranslationMode,
 };
@@ -25,10 +26,17 @@ use std::time::Instant;
 /// A built recipe: the synthesizer and what the caller needs around it.
 #[derive(Debug)]
 pub struct BuiltRecipe {
-    /// Ready to yield frames.
+    /// Ready to yield frames, on the welded target: its frames are in the welded numbering
+    /// ([`BuiltRecipe::weld`]); [`BuiltRecipe::frame`] gives them in the target's own.
     pub synthesizer: Synthesizer,
-    /// The target reference.
+    /// The target reference, as read.
     pub target: TriMesh,
+    /// The weld of the target's split vertices the synthesizer solves on (the identity when
+    /// nothing coincides); see [`super::recipe_weld`].
+    pub weld: Weld,
+    /// Per layer, how many split vertices of its source reference were welded (the target's
+    /// count for a layer that animates the target).
+    pub source_welded_vertices: Vec<usize>,
     /// Every file the recipe read (outputs must not overwrite them).
     pub inputs: Vec<PathBuf>,
     /// Layer names (`layer N` when unnamed).
@@ -39,6 +47,35 @@ pub struct BuiltRecipe {
     pub correspondence_seconds: f64,
     /// Seconds reading files.
     pub read_seconds: f64,
+}
+
+impl BuiltRecipe {
+    /// Output frame `f` in the target's own vertex layout and order.
+    pub fn frame(&self, f: usize) -> Result<SynthFrame, SynthError> {
+        let mut fr = self.synthesizer.frame(f)?;
+        if !self.weld.is_identity() {
+            fr.positions = self.weld.scatter(&fr.positions);
+        }
+        Ok(fr)
+    }
+
+    /// Every output frame in order, as [`BuiltRecipe::frame`].
+    pub fn frames(&self) -> impl Iterator<Item = Result<SynthFrame, SynthError>> + '_ {
+        (0..self.synthesizer.num_frames()).map(|f| self.frame(f))
+    }
+
+    /// Triangles of a frame from [`BuiltRecipe::frame`] that face against their wanted
+    /// orientation ([`Synthesizer::flipped_triangles`]; triangle ids are the target's).
+    pub fn flipped_triangles(&self, frame: &SynthFrame) -> Vec<usize> {
+        if self.weld.is_identity() {
+            return self.synthesizer.flipped_triangles(frame);
+        }
+        let welded = SynthFrame {
+            positions: self.weld.gather(&frame.positions),
+            ..frame.clone()
+        };
+        self.synthesizer.flipped_triangles(&welded)
+    }
 }
 
 /// Frames of one layer: a glob, a directory, an animation file, one mesh, or a list.
@@ -92,18 +129,87 @@ fn scribble_mask(
     rf: &RecipeFile,
     path: &str,
     span: Range<usize>,
-    target: &TriMesh,
+    (target, weld): (&TriMesh, &Weld),
     inputs: &mut Vec<PathBuf>,
 ) -> Result<Vec<bool>, RecipeError> {
     let p = rf.resolve(path);
     inputs.push(p.clone());
     Scribble::read(&p)
-        .and_then(|s| s.triangle_mask(target.num_vertices(), &target.triangles))
+        .and_then(|s| super::recipe_weld::scribble_mask(&s, target, weld))
         .map_err(|e| rf.error(span, "scribble", format!("{}: {e}", p.display())))
 }
 
+/// A layer's meshes as read (input numbering), before the welds are known.
+struct ReadLayer {
+    /// The source reference and its path; `None` for a layer animating the target.
+    source: Option<(TriMesh, PathBuf)>,
+    /// The source frames, scaled.
+    frames: ShapeSet,
+}
+
 impl RecipeFile {
-    /// Reads everything the recipe names and builds the [`Synthesizer`] (one factorization).
+    /// Reads the source reference and frames of layer `k`.
+    fn read_layer(
+        &self,
+        k: usize,
+        target: (&TriMesh, &Path),
+        inputs: &mut Vec<PathBuf>,
+    ) -> Result<ReadLayer, RecipeError> {
+        let l = self.recipe.layers[k].get_ref();
+        let source = match &l.source_reference {
+            Some(s) => {
+                let p = self.resolve(s.get_ref());
+                inputs.push(p.clone());
+                let m =
+                    io::read_mesh(&p).map_err(|e| self.error(s.span(), "source_reference", e))?;
+                Some((m, p))
+            }
+            None => {
+                if let Some(m) = l.markers.as_ref().or(l.correspondence.as_ref()) {
+                    return Err(self.error(
+                        m.span(),
+                        "markers",
+                        "a layer without source_reference animates the target itself and takes no markers or correspondence",
+                    ));
+                }
+                None
+            }
+        };
+        let (reference, ref_path) = source.as_ref().map_or(target, |(m, p)| (m, p.as_path()));
+        let mut frames = read_frames(self, l.source_frames.get_ref(), ref_path, inputs)
+            .map_err(|e| self.error(l.source_frames.span(), "source_frames", e))?;
+        frames
+            .check_connectivity("source reference", reference)
+            .map_err(|e| {
+                self.error(
+                    l.source_frames.span(),
+                    "source_frames",
+                    format!("{e} (the frames must share the source reference's connectivity)"),
+                )
+            })?;
+        if let Some(s) = &l.source_scale {
+            let f = *s.get_ref();
+            if !(f.is_finite() && f > 0.0) {
+                return Err(self.error(s.span(), "source_scale", "must be positive"));
+            }
+            let scaled = (0..frames.len())
+                .map(|i| {
+                    let p = frames
+                        .positions(i)
+                        .iter()
+                        .map(|q| q.map(|x| f * x))
+                        .collect();
+                    (frames.name(i).to_string(), p)
+                })
+                .collect();
+            frames = ShapeSet::new(frames.base().clone(), scaled)
+                .map_err(|e| self.error(s.span(), "source_scale", e))?;
+        }
+        Ok(ReadLayer { source, frames })
+    }
+
+    /// Reads everything the recipe names and builds the [`Synthesizer`] (one factorization) on
+    /// the welded target (see [`super::recipe_weld`]).
     pub fn build(&self) -> Result<BuiltRecipe, RecipeError> {
         let r = &self.recipe;
         let t0 = Instant::now();
@@ -113,65 +219,58 @@ impl RecipeFile {
         let target =
             io::read_mesh(&target_path).map_err(|e| self.error(r.target.span(), "target", e))?;
         let diag = target.bbox_diagonal();
+        let mut read = Vec::with_capacity(r.layers.len());
+        for k in 0..r.layers.len() {
+            read.push(self.read_layer(k, (&target, &target_path), &mut inputs)?);
+        }
+        let rest = match &r.rest {
+            Some(s) => {
+                let p = self.resolve(s.get_ref());
+                inputs.push(p.clone());
+                let m = io::read_mesh(&p).map_err(|e| self.error(s.span(), "rest", e))?;
+                if m.triangles != target.triangles {
+                    return Err(self.error(
+                        s.span(),
+                        "rest",
+                        "has other connectivity than the target",
+                    ));
+                }
+                Some(m.positions)
+            }
+            None => None,
+        };
+        // The target's shapes: rest and the frames of the layers that animate it.
+        let mut target_shapes: Vec<&[Point]> = rest.iter().map(|p| &p[..]).collect();
+        for l in read.iter().filter(|l| l.source.is_none()) {
+            target_shapes.extend(l.frames.all_positions().iter().map(|p| &p[..]));
+        }
+        let target_weld = weld_keeping_triangles(&target, &target_shapes);
+        let welded_target = target_weld.mesh(&target);
         let mut corr_seconds = 0.0;
         let mut cache: HashMap<(PathBuf, PathBuf), Correspondence> = HashMap::new();
         let mut layers = Vec::with_capacity(r.layers.len());
         let mut names = Vec::new();
-        for (k, sl) in r.layers.iter().enumerate() {
+        let mut source_welds = Vec::new();
+        for (k, (sl, rl)) in r.layers.iter().zip(read).enumerate() {
             let l = sl.get_ref();
             let table = sl.span();
             names.push(l.name.clone().unwrap_or_else(|| format!("layer {k}")));
-            let (source_reference, ref_path) = match &l.source_reference {
-                Some(s) => {
-                    let p = self.resolve(s.get_ref());
-                    inputs.push(p.clone());
-                    let m = io::read_mesh(&p)
-                        .map_err(|e| self.error(s.span(), "source_reference", e))?;
-                    (m, p)
+            let ReadLayer { source, frames } = rl;
+            let source_weld = match &source {
+                Some((m, _)) => {
+                    let all: Vec<&[Point]> =
+                        frames.all_positions().iter().map(|p| &p[..]).collect();
+                    weld_keeping_triangles(m, &all)
                 }
-                None => {
-                    if let Some(m) = l.markers.as_ref().or(l.correspondence.as_ref()) {
-                        return Err(self.error(
-                            m.span(),
-                            "markers",
-                            "a layer without source_reference animates the target itself and takes no markers or correspondence",
-                        ));
-                    }
-                    (target.clone(), target_path.clone())
-                }
+                None => target_weld.clone(),
             };
-            let mut frames = read_frames(self, l.source_frames.get_ref(), &ref_path, &mut inputs)
-                .map_err(|e| self.error(l.source_frames.span(), "source_frames", e))?;
-            frames
-                .check_connectivity("source reference", &source_reference)
-                .map_err(|e| {
-                    self.error(
-                        l.source_frames.span(),
-                        "source_frames",
-                        format!("{e} (the frames must share the source reference's connectivity)"),
-                    )
-                })?;
-            if let Some(s) = &l.source_scale {
-                let f = *s.get_ref();
-                if !(f.is_finite() && f > 0.0) {
-                    return Err(self.error(s.span(), "source_scale", "must be positive"));
-                }
-                let scaled = (0..frames.len())
-                    .map(|i| {
-                        let p = frames
-                            .positions(i)
-                            .iter()
-                            .map(|q| q.map(|x| f * x))
-                            .collect();
-                        (frames.name(i).to_string(), p)
-                    })
-                    .collect();
-                frames = ShapeSet::new(frames.base().clone(), scaled)
-                    .map_err(|e| self.error(s.span(), "source_scale", e))?;
-            }
-            let correspondence = match (&l.source_reference, &l.markers, &l.correspondence) {
-                (None, _, _) => Correspondence::identity(&target),
-                (Some(_), Some(m), None) => {
+            let source_reference = match &source {
+                Some((m, _)) => source_weld.mesh(m),
+                None => welded_target.clone(),
+            };
+            let correspondence = match (&source, &l.markers, &l.correspondence) {
+                (None, _, _) => Correspondence::identity(&welded_target),
+                (Some((_, ref_path)), Some(m), None) => {
                     let p = self.resolve(m.get_ref());
                     inputs.push(p.clone());
                     let key = (ref_path.clone(), p.clone());
@@ -181,10 +280,11 @@ impl RecipeFile {
                             let markers = Markers::read(&p).map_err(|e| {
                                 self.error(m.span(), "markers", format!("{}: {e}", p.display()))
                             })?;
+                            let markers = welded_markers(&markers, &source_weld, &target_weld);
                             let t = Instant::now();
                             let c = correspond(
                                 &source_reference,
-                                &target,
+                                &welded_target,
                                 &markers,
                                 &CorrespondenceOptions::default(),
                             )
@@ -199,19 +299,21 @@ impl RecipeFile {
                 (Some(_), None, Some(c)) => {
                     let p = self.resolve(c.get_ref());
                     inputs.push(p.clone());
-                    std::fs::read_to_string(&p)
+                    let file = std::fs::read_to_string(&p)
                         .map_err(|e| e.to_string())
                         .and_then(|t| Correspondence::from_json(&t).map_err(|e| e.to_string()))
                         .map_err(|e| {
                             self.error(c.span(), "correspondence", format!("{}: {e}", p.display()))
-                        })?
+                        })?;
+                    welded_correspondence(file, &source_weld, &target_weld)
                 }
-                (Some(s), None, None) => {
+                (Some(_), None, None) => {
+                    let s = l.source_reference.as_ref().expect("a source");
                     return Err(self.error(
                         s.span(),
                         "source_reference",
                         "give markers or correspondence for a layer with another source mesh",
-                    ))
+                    ));
                 }
                 (Some(_), Some(m), Some(_)) => {
                     return Err(self.error(
@@ -225,7 +327,7 @@ impl RecipeFile {
                 self,
                 l.scribble.get_ref(),
                 l.scribble.span(),
-                &target,
+                (&target, &target_weld),
                 &mut inputs,
             )?;
             let speed = l.speed.as_ref().map_or(1.0, |s| *s.get_ref());
@@ -249,9 +351,15 @@ impl RecipeFile {
                     BlendRegion::Geodesic { width: w * diag }
                 }
             };
+            let frames = frames
+                .all_positions()
+                .iter()
+                .map(|p| source_weld.gather(p))
+                .collect();
+            source_welds.push(source_weld.merged());
             layers.push(LayerSpec {
                 source_reference,
-                frames: frames.all_positions().to_vec(),
+                frames,
                 correspondence,
                 scribble,
                 mode: l.mode.as_ref().map_or(BlendMode::Blend, |m| *m.get_ref()),
@@ -273,7 +381,7 @@ impl RecipeFile {
                 self,
                 p.scribble.get_ref(),
                 p.scribble.span(),
-                &target,
+                (&target, &target_weld),
                 &mut inputs,
             )?;
             poses.push(PoseSpec {
@@ -283,22 +391,6 @@ impl RecipeFile {
                 angle: p.angle.to_radians(),
             });
         }
-        let rest = match &r.rest {
-            Some(s) => {
-                let p = self.resolve(s.get_ref());
-                inputs.push(p.clone());
-                let m = io::read_mesh(&p).map_err(|e| self.error(s.span(), "rest", e))?;
-                if m.triangles != target.triangles {
-                    return Err(self.error(
-                        s.span(),
-                        "rest",
-                        "has other connectivity than the target",
-                    ));
-                }
-                Some(m.positions)
-            }
-            None => None,
-        };
         let opts = SynthOptions {
             frames: *r.frames.get_ref(),
             gamma: r.gamma.as_ref().map_or(super::GAMMA, |g| *g.get_ref()),
@@ -308,12 +400,12 @@ impl RecipeFile {
                 TranslationKind::Fixed => TranslationMode::FixedVertex,
             },
             follow_layer: r.follow_layer.as_ref().map(|f| *f.get_ref()),
-            rest,
+            rest: rest.map(|p| target_weld.gather(&p)),
             ..Default::default()
         };
         let read_seconds = t0.elapsed().as_secs_f64() - corr_seconds;
         let synthesizer =
-            Synthesizer::new(&target, layers, &poses, &opts).map_err(|e| self.locate(e))?;
+            Synthesizer::new(&welded_target, layers, &poses, &opts).map_err(|e| self.locate(e))?;
         let fps = r.fps.unwrap_or(24.0);
         if !(fps.is_finite() && fps > 0.0) {
             return Err(self.error(0..0, "fps", "must be positive"));
@@ -321,6 +413,8 @@ impl RecipeFile {
         Ok(BuiltRecipe {
             synthesizer,
             target,
+            weld: target_weld,
+            source_welded_vertices: source_welds,
             inputs,
             layer_names: names,
             fps,

@@ -255,7 +255,7 @@ impl GltfAsset {
     /// animation of the chosen mesh whose data disagrees with its target count.
     pub fn read(path: &Path, opts: &GltfReadOptions) -> Result<Self, IoError> {
         let bytes = read_file(path)?;
-        let (loaded, found) = load_with(path, bytes, opts, |s| scan(path, s))?;
+        let (loaded, found) = load_with(path, bytes, opts, false, |s| scan(path, s))?;
         let Loaded {
             json,
             buffers,
@@ -335,7 +335,13 @@ impl GltfAsset {
                 out.push(format!("{n} {many}"));
             }
         };
-        counted(count("materials"), "material", "materials");
+        // The default grey material of a file morphkit wrote itself is nothing of the user's
+        // (an asset morphkit carried keeps its own generator).
+        let own = doc["asset"]["generator"]
+            .as_str()
+            .is_some_and(|g| g.starts_with("morphkit "));
+        let materials = if own { 0 } else { count("materials") };
+        counted(materials, "material", "materials");
         counted(count("textures"), "texture", "textures");
         counted(count("skins"), "skin", "skins");
         counted(count("cameras"), "camera", "cameras");

@@ -121,13 +121,15 @@ pub fn parse_gltf_morphs(path: &Path, bytes: Vec<u8>) -> Result<GltfMorphs, IoEr
 ///
 /// Positions are those of the mesh, in its own space: the transforms of the nodes using it
 /// are not applied (a quantized file, `KHR_mesh_quantization`, usually keeps its dequantizing
-/// scale and offset on the node, so its positions are in integer units).
+/// scale and offset on the node, so its positions are in integer units), except for a rig
+/// that morphkit quantized ([`super::GltfOptions::quantize`]): its mesh's
+/// `extras.morphkitDequantization` (the node's translation and uniform scale) is applied.
 pub fn parse_gltf_morphs_with(
     path: &Path,
     bytes: Vec<u8>,
     opts: &GltfReadOptions,
 ) -> Result<GltfMorphs, IoError> {
-    load_with(path, bytes, opts, |_| Ok(())).map(|(l, ())| l.morphs)
+    load_with(path, bytes, opts, true, |_| Ok(())).map(|(l, ())| l.morphs)
 }
 
 /// Everything a read found: the JSON as in the file, the buffers, the chosen mesh and its
@@ -158,11 +160,13 @@ pub(super) struct Scan<'a> {
 }
 
 /// Reads the file's bytes as [`parse_gltf_morphs_with`] does, also calling `scan` on the parsed
-/// document (for what [`super::GltfAsset`] needs beyond the morphs).
+/// document (for what [`super::GltfAsset`] needs beyond the morphs). With `dequantize` false,
+/// a morphkit-quantized rig stays in its mesh's own (integer) units, where edits are written.
 pub(super) fn load_with<T>(
     path: &Path,
     bytes: Vec<u8>,
     opts: &GltfReadOptions,
+    dequantize: bool,
     scan: impl FnOnce(Scan) -> Result<T, IoError>,
 ) -> Result<(Loaded, T), IoError> {
     let is_glb = bytes.starts_with(b"glTF");
@@ -225,16 +229,28 @@ pub(super) fn load_with<T>(
         views: &views,
     };
     let mesh = choose_mesh(path, doc, opts)?;
-    let (base, displacements, primitives) = read_mesh(path, &mesh, &data)?;
+    let (mut base, displacements, primitives) = read_mesh(path, &mesh, &data)?;
+    // A quantized morphkit rig: positions back in their units (the node's transform), unless
+    // the caller edits the file in the mesh's own space (GltfAsset).
+    let dequant = super::read_chunks::dequantization(doc, &mesh).filter(|_| dequantize);
+    if let Some(d) = dequant {
+        super::read_chunks::dequantize(d, &mut base.positions);
+    }
+    let unscale = |mut d: Vec<Vec<Point>>| {
+        if let Some((_, s)) = dequant {
+            d.iter_mut().flatten().flatten().for_each(|x| *x *= s);
+        }
+        d
+    };
     // Displacements become absolute positions in place (no second copy of every target).
-    let mut targets = displacements;
+    let mut targets = unscale(displacements);
     for d in &mut targets {
         for (q, b) in d.iter_mut().zip(&base.positions) {
             *q = [b[0] + q[0], b[1] + q[1], b[2] + q[2]];
         }
     }
     let split_rig = if mesh.index() == 0 {
-        super::read_chunks::read_split(path, doc, &data, &base.positions)?
+        super::read_chunks::read_split(path, doc, &data, &base.positions, dequant)?
     } else {
         None
     };

@@ -18,15 +18,53 @@ pub(super) fn rig_indices(extras: &::gltf::json::Extras) -> Option<Vec<usize>> {
         .collect()
 }
 
+/// `extras.morphkitDequantization` of a mesh that morphkit quantized: the translation and the
+/// uniform scale of its node, `p = translation + scale · stored`. Taken only while a node
+/// using the mesh still has that translation and that scale (or 0, a hidden window) and no
+/// rotation, so that a file a tool re-quantized (keeping extras) is not dequantized twice.
+pub(super) fn dequantization(
+    doc: &::gltf::Document,
+    mesh: &::gltf::Mesh,
+) -> Option<([f64; 3], f64)> {
+    let v: serde_json::Value = serde_json::from_str(mesh.extras().as_ref()?.get()).ok()?;
+    let d = v.get("morphkitDequantization")?;
+    let t = d.get("translation")?.as_array()?;
+    let t: Vec<f64> = t.iter().map(|x| x.as_f64()).collect::<Option<_>>()?;
+    let s = d.get("scale")?.as_f64()?;
+    let t: [f64; 3] = t.try_into().ok()?;
+    if !(t.iter().all(|x| x.is_finite()) && s.is_finite()) {
+        return None;
+    }
+    let on_node = doc
+        .nodes()
+        .filter(|n| n.mesh().is_some_and(|m| m.index() == mesh.index()))
+        .any(|n| {
+            let (nt, nr, ns) = n.transform().decomposed();
+            let same = |a: f32, b: f64| a == b as f32;
+            (0..3).all(|k| same(nt[k], t[k]))
+                && nr == [0.0, 0.0, 0.0, 1.0]
+                && (ns.iter().all(|&x| same(x, s)) || ns == [0.0; 3])
+        });
+    on_node.then_some((t, s))
+}
+
+/// Positions in stored units put back in their own: `translation + scale · p`.
+pub(super) fn dequantize((t, s): ([f64; 3], f64), positions: &mut [Point]) {
+    for p in positions {
+        *p = [0, 1, 2].map(|k| t[k] + s * p[k]);
+    }
+}
+
 /// The rig of a split file: names, absolute target positions and merged weight keys; `None`
 /// when mesh 0 is not part of a split rig. `base` are the base positions of mesh 0, which
-/// every part shares.
+/// every part shares, already dequantized with `dequant` (whose scale the deltas need).
 #[allow(clippy::type_complexity)]
 pub(super) fn read_split(
     path: &Path,
     doc: &::gltf::Document,
     data: &Data,
     base: &[Point],
+    dequant: Option<([f64; 3], f64)>,
 ) -> Result<Option<(Vec<String>, Vec<Vec<Point>>, Vec<(f64, Vec<f64>)>)>, IoError> {
     let parts: Vec<(::gltf::Mesh, Vec<usize>)> = doc
         .meshes()
@@ -74,11 +112,14 @@ pub(super) fn read_split(
         }
         let local_names = target_names(mesh.extras(), rig.len());
         for (j, target) in local.iter().enumerate() {
-            let d = match target.positions() {
+            let mut d = match target.positions() {
                 Some(acc) => accessor::read_vec3(&acc, data)
                     .map_err(|m| at(format!("morph target {j}: POSITION {m}")))?,
                 None => vec![[0.0; 3]; nv],
             };
+            if let Some((_, s)) = dequant {
+                d.iter_mut().flatten().for_each(|x| *x *= s);
+            }
             if d.len() != nv || d.iter().flatten().any(|x| !x.is_finite()) {
                 return Err(at(format!(
                     "morph target {j} has {} finite displacements, the base has {nv} vertices",

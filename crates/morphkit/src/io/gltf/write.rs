@@ -1,16 +1,16 @@
 //! Writing [`GltfMorphs`] as glTF (JSON with an embedded data URI) or GLB.
 
-use super::normals::{to_f32_unit, vertex_normals};
 use super::split::{windows, Window};
+use super::write_vertices::{self, Dequant};
 use super::{GltfMorphs, GltfOptions};
 use crate::io::{atomic::write_atomic, IoError};
 use crate::mesh::Point;
 use serde_json::{json, Value};
 use std::path::Path;
 
-const ARRAY_BUFFER: u32 = 34962;
+pub(super) const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
-const FLOAT: u32 = 5126;
+pub(super) const FLOAT: u32 = 5126;
 const UNSIGNED_INT: u32 = 5125;
 
 /// Buffer and accessor bookkeeping.
@@ -19,6 +19,9 @@ pub(super) struct Builder {
     pub(super) bin: Vec<u8>,
     pub(super) views: Vec<Value>,
     pub(super) accessors: Vec<Value>,
+    /// The indices, index size and view of the last sparse accessor, shared by the next one
+    /// when it lists the same vertices.
+    pub(super) last_sparse: Option<(Vec<u32>, usize, usize)>,
 }
 
 impl Builder {
@@ -192,6 +195,13 @@ pub struct GltfSummary {
     /// Things a viewer may not play, in words (a mesh above [`GltfOptions::max_targets`] that
     /// could not be split).
     pub warnings: Vec<String>,
+    /// With [`GltfOptions::quantize`]: targets whose position deltas did not fit the 16-bit
+    /// range (moving farther than the mesh's size) and stayed `f32`.
+    pub float_position_targets: usize,
+    /// With [`GltfOptions::quantize`]: targets whose normal deltas did not fit 8 bits (some
+    /// normal turns so far that a component changes by more than 1, common where limbs rotate
+    /// by 90° or more) and stayed `f32`.
+    pub float_normal_targets: usize,
 }
 
 /// Weight rows of `keys` restricted to `targets`, as `f32`, for keys `k0..=k1`.
@@ -253,35 +263,16 @@ pub(super) fn build_with(
         ..GltfSummary::default()
     };
     let mut b = Builder::default();
-    crate::io::atomic::check_fits_f32(path, "base", &m.base.positions)?;
-    let base = to_f32(path, "base", &m.base.positions, None)?;
-    let pos = b.vec3(&base);
-    let indices = b.triangle_indices(&m.base);
     // Accessor order: POSITION 0, indices 1, NORMAL 2, then the targets.
-    let base_normals = opts
-        .normals
-        .then(|| vertex_normals(&m.base.positions, &m.base.triangles));
-    let normal = base_normals.as_ref().map(|n| b.vec3_plain(&to_f32_unit(n)));
-    let mut targets = Vec::with_capacity(m.targets.len());
-    for (t, tp) in m.targets.iter().enumerate() {
-        let d = to_f32(
-            path,
-            &format!("morph target {t}"),
-            tp,
-            Some(&m.base.positions),
-        )?;
-        let mut target = json!({"POSITION": b.vec3(&d)});
-        if let Some(n0) = &base_normals {
-            let n = vertex_normals(tp, &m.base.triangles);
-            let dn: Vec<[f32; 3]> = to_f32_unit(&n)
-                .iter()
-                .zip(to_f32_unit(n0))
-                .map(|(a, c)| [a[0] - c[0], a[1] - c[1], a[2] - c[2]])
-                .collect();
-            target["NORMAL"] = json!(b.vec3_plain(&dn));
-        }
-        targets.push(target);
-    }
+    let vertices = write_vertices::write(path, m, opts, &mut b)?;
+    summary.float_position_targets = vertices.float_positions;
+    summary.float_normal_targets = vertices.float_normals;
+    let (pos, indices, normal, targets) = (
+        vertices.position,
+        vertices.indices,
+        vertices.normal,
+        vertices.targets,
+    );
     let rows: Vec<Vec<f64>> = m.weight_keys.iter().map(|(_, w)| w.clone()).collect();
     let windows = match windows(&rows, m.targets.len(), opts.max_targets) {
         Some(w) => w,
@@ -335,6 +326,13 @@ pub(super) fn build_with(
     if let Some(e) = &opts.extras {
         doc["scenes"][0]["extras"] = e.clone();
     }
+    let dequant = vertices.dequant;
+    if dequant.is_some() {
+        doc["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+        doc["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+    }
+    // The node scale of a shown mesh: the dequantizing scale, or 1.
+    let shown = dequant.map_or(1.0, |d| d.scale);
     let mut samplers = Vec::new();
     let mut channels = Vec::new();
     let last = m.weight_keys.len().saturating_sub(1);
@@ -361,8 +359,15 @@ pub(super) fn build_with(
             }
         }
         mesh["primitives"] = json!([primitive]);
+        if let Some(d) = dequant {
+            mesh["extras"]["morphkitDequantization"] = dequantization_json(d);
+        }
         doc["meshes"].as_array_mut().expect("meshes").push(mesh);
         let mut node = json!({"mesh": c, "name": name});
+        if let Some(d) = dequant {
+            node["translation"] = json!(d.offset);
+            node["scale"] = json!([d.scale, d.scale, d.scale]);
+        }
         if split && c > 0 {
             node["scale"] = json!([0.0, 0.0, 0.0]);
         }
@@ -387,7 +392,7 @@ pub(super) fn build_with(
             if k0 > 0 {
                 keys.push((time(0), 0.0));
             }
-            keys.push((time(k0), 1.0));
+            keys.push((time(k0), shown));
             if k1 < last {
                 keys.push((time(k1), 0.0));
             }
@@ -412,6 +417,13 @@ pub(super) fn build_with(
         }]);
     }
     Ok((doc, b, summary))
+}
+
+/// `mesh.extras.morphkitDequantization` of a quantized rig: the node transform that gives its
+/// positions (`translation`, uniform `scale`), so that the reader puts them back in their
+/// units without looking for the node (a hidden window's node has scale 0).
+fn dequantization_json(d: Dequant) -> Value {
+    json!({"translation": d.offset, "scale": d.scale})
 }
 
 /// Pads the buffer and writes the buffer views, accessors and buffer into the document.
