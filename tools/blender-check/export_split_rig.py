@@ -5,7 +5,10 @@ triangle into its own three vertices; `smooth` keeps shared vertices except alon
 seam, where the map wraps from u = 1 back to 0 (the split an artist's smooth, unwrapped
 character gets).
 
-    blender -b --python export_split_rig.py -- BASE.obj TARGET.obj OUT.glb [flat|smooth]
+    blender -b --python export_split_rig.py -- BASE.obj TARGET.obj OUT.glb [flat|smooth] [apply]
+
+`apply` bakes the importer's object rotation (OBJ is Y-up) into the vertices, so the exported
+node has no transform and the mesh's own space is the world's (what a viewer check compares).
 
 Positions keep Blender's axes (`export_yup=False`), so they compare with the OBJ inputs.
 """
@@ -17,6 +20,7 @@ import bpy
 args = sys.argv[sys.argv.index("--") + 1:]
 base_path, target_path, out = args[:3]
 smooth = len(args) > 3 and args[3] == "smooth"
+apply = len(args) > 4 and args[4] == "apply"
 for o in list(bpy.data.objects):
     bpy.data.objects.remove(o)
 
@@ -31,6 +35,12 @@ def load(path):
 
 base = load(base_path)
 target = load(target_path)
+if apply:
+    for o in (base, target):
+        bpy.ops.object.select_all(action="DESELECT")
+        o.select_set(True)
+        bpy.context.view_layer.objects.active = o
+        bpy.ops.object.transform_apply(location=True, rotation=True, scale=True)
 base.shape_key_add(name="Basis")
 key = base.shape_key_add(name="bend")
 for i, v in enumerate(target.data.vertices):
