@@ -356,6 +356,44 @@ impl Outputs {
         })?)
     }
 
+    /// Stages an animation of a command's `target` mesh file: into the user's asset when both
+    /// `target` and `path` are glTF (the frames added as the clip `clip`, at `k / fps` seconds,
+    /// [`io::GltfAsset::add_frame_animation`]), into the target's own OBJ records for a frame
+    /// directory of an OBJ target, and as [`Outputs::frames`] otherwise.
+    pub fn frames_of_target(
+        &mut self,
+        path: &Path,
+        frames: &ShapeSet,
+        opts: &FramesOptions,
+        target: &Path,
+        clip: &str,
+    ) -> anyhow::Result<()> {
+        let gltf = |p: &Path| matches!(Format::from_path(p), Some(Format::Glb | Format::Gltf));
+        if gltf(target) && gltf(path) && !is_frame_dir(path) {
+            let mut asset = io::GltfAsset::read(target, &io::GltfReadOptions::default())?;
+            if asset.morphs().base.num_vertices() == frames.num_vertices() {
+                asset.set_max_targets(asset_max_targets());
+                let positions: Vec<Vec<morphkit::mesh::Point>> = (0..frames.len())
+                    .map(|k| frames.positions(k).to_vec())
+                    .collect();
+                let times: Vec<f64> = (0..frames.len()).map(|k| k as f64 / opts.fps).collect();
+                asset.add_frame_animation(clip, &times, &positions)?;
+                self.gltf_asset(path, &asset, &opts.inputs, frames.len())?;
+                eprintln!(
+                    "added the animation '{clip}' ({} frames, one morph target each) to the asset of {}",
+                    frames.len(),
+                    target.display()
+                );
+                return Ok(());
+            }
+        }
+        let mut opts = opts.clone();
+        if opts.obj_template.is_none() {
+            opts.obj_template = crate::util::obj_template(target, frames.num_vertices())?;
+        }
+        self.frames(path, frames, &opts, |_| {})
+    }
+
     /// Stages an animation written frame by frame ([`io::FrameStream`]: a frame directory
     /// when `dir`, else `.pc2`) of `frames` frames of `base`'s connectivity; a directory's
     /// frames are written into `template` where there is one.

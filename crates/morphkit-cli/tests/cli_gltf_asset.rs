@@ -358,3 +358,59 @@ fn rig_into_a_glb_target_keeps_the_asset() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `transfer` onto a GLB target writes into that asset: the transferred frames become the clip
+/// 'transfer' of its mesh, everything else is kept, and the frames are those of the same
+/// transfer onto the target's mesh as an OBJ (to the file's f32 storage).
+#[test]
+fn transfer_into_a_glb_target_adds_a_clip_to_the_asset() {
+    let d = tmp_dir("asset-transfer");
+    let input = d.join("in.glb");
+    let doc = fixture::write(&input, &fixture::standard(false, 100.0));
+    let (files, _) = old_inputs(&d, &input);
+    let n = io::read_gltf_morphs_with(&input, &body())
+        .unwrap()
+        .base
+        .num_vertices();
+    let pairs: Vec<[usize; 2]> = (0..n).step_by(5).map(|v| [v, v]).collect();
+    let markers = d.join("markers.json");
+    std::fs::write(&markers, serde_json::json!({ "pairs": pairs }).to_string()).unwrap();
+    let run = |target: &Path, out: &Path| {
+        let mut args = vec!["transfer", "--source-ref", files[0].as_str(), "--source"];
+        args.extend(files[1..].iter().map(String::as_str));
+        args.extend([
+            "--target",
+            s(target),
+            "--markers",
+            s(&markers),
+            "--out",
+            s(out),
+        ]);
+        run_ok(&args).1
+    };
+    let out = d.join("out.glb");
+    let err = run(&input, &out);
+    assert!(err.contains("added the animation 'transfer'"), "{err}");
+    let plain = d.join("plain");
+    run(Path::new(&files[0]), &plain);
+    let got = fixture::json_of(&out);
+    let mut carried = blank_edits(&got, 1);
+    let anims = carried["animations"].as_array_mut().unwrap();
+    assert_eq!(anims.last().unwrap()["name"], "transfer");
+    anims.pop();
+    assert_eq!(carried, blank_edits(&doc, 1));
+    assert_eq!(got["images"], doc["images"]);
+    fixture::assert_valid(&[&out]);
+    let a = GltfAsset::read(&out, &body()).unwrap();
+    let m = a.morphs();
+    let diag = diagonal(&m.base.positions);
+    let anim = a.weight_animation(Some("transfer")).unwrap().unwrap();
+    assert_eq!(anim.keys.len(), files.len() - 1);
+    for (k, (_, w)) in anim.keys.iter().enumerate() {
+        let want = common::split::read(&plain.join(format!("frame_{k:04}.obj"))).0;
+        for (g, o) in m.evaluate(w).iter().zip(&want) {
+            assert!(dist(*g, *o) <= 1e-6 * diag, "frame {k}: {g:?} vs {o:?}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -159,7 +159,8 @@ pub fn run(args: &SynthArgs) -> anyhow::Result<()> {
         );
     }
     let set = ShapeSet::new(built.target.clone(), out)?;
-    outputs.frames(
+    // The target comes back as the artist's own file (an OBJ's records, a glTF asset's clip).
+    outputs.frames_of_target(
         &args.out,
         &set,
         &FramesOptions {
@@ -167,7 +168,8 @@ pub fn run(args: &SynthArgs) -> anyhow::Result<()> {
             inputs: built.inputs.clone(),
             ..FramesOptions::default()
         },
-        |_| {},
+        &built.target_path,
+        "synth",
     )?;
     let weights: Vec<&[f64]> = (0..s.num_layers())
         .map(|k| s.layer_info(k).weights.values.as_slice())

@@ -267,14 +267,14 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
         );
     }
     let set = ShapeSet::new(input_target.clone(), out)?;
-    // An OBJ target comes back as the artist's own file (io::ObjTemplate).
+    // The target comes back as the artist's own file: an OBJ's records (io::ObjTemplate), a
+    // glTF asset with the transfer added as a clip (io::GltfAsset).
     let frame_opts = FramesOptions {
         fps: args.fps,
         inputs,
-        obj_template: crate::util::obj_template(&args.target, input_target.num_vertices())?,
         ..FramesOptions::default()
     };
-    outputs.frames(&args.out, &set, &frame_opts, |_| {})?;
+    outputs.frames_of_target(&args.out, &set, &frame_opts, &args.target, "transfer")?;
     if let Some(r) = &args.report {
         report["timings"] = json!({
             "correspondence_s": report["correspondence"]["seconds"],

@@ -31,6 +31,9 @@ pub struct BuiltRecipe {
     pub synthesizer: Synthesizer,
     /// The target reference, as read.
     pub target: TriMesh,
+    /// The target reference's file (outputs of the target carry it: its OBJ records or glTF
+    /// asset).
+    pub target_path: PathBuf,
     /// The weld of the target's split vertices the synthesizer solves on (the identity when
     /// nothing coincides); see [`super::recipe_weld`].
     pub weld: Weld,
@@ -413,6 +416,7 @@ impl RecipeFile {
         Ok(BuiltRecipe {
             synthesizer,
             target,
+            target_path,
             weld: target_weld,
             source_welded_vertices: source_welds,
             inputs,
