@@ -23,8 +23,8 @@ pub(crate) fn mesh_weld(mesh: &TriMesh, weld: bool) -> Option<Weld> {
     if !weld {
         return None;
     }
-    let w = Weld::of_mesh(mesh, WELD_TOLERANCE);
-    (!w.is_identity() && w.keeps_triangles(&mesh.triangles)).then_some(w)
+    let w = Weld::keeping_triangles(mesh, &[]);
+    (!w.is_identity()).then_some(w)
 }
 
 /// `positions` of the welded mesh in the input's layout (as they are without a weld).

@@ -6,29 +6,16 @@
 use super::corr_args::{CorrespondenceArgs, Obtained};
 use super::correspond::{confidence_summary, print_summary, summary};
 use anyhow::{bail, Context};
-use morphkit::mesh::{Point, Weld, WELD_TOLERANCE};
+use morphkit::mesh::{Point, Weld};
 use morphkit::transfer::{
     correspond, Correspondence, CorrespondenceOptions, Markers, RefineOptions,
 };
 use morphkit::TriMesh;
 use std::time::Instant;
 
-/// The weld of the vertices of `mesh` that coincide in every one of `shapes` (each
-/// `#V` positions; none: in `mesh` alone), or the identity where it would drop a triangle (so
-/// that per-triangle data and correspondences keep their triangle ids) or the counts differ.
+/// [`Weld::keeping_triangles`]: the weld transfer, correspondence and flexibility solve on.
 pub fn mesh_weld(mesh: &TriMesh, shapes: &[&[Point]]) -> Weld {
-    let n = mesh.num_vertices();
-    if shapes.iter().any(|s| s.len() != n) {
-        return Weld::identity(n);
-    }
-    let mut sets: Vec<&[Point]> = vec![&mesh.positions];
-    sets.extend(shapes.iter().copied());
-    let w = Weld::of_positions(&sets, WELD_TOLERANCE);
-    if w.keeps_triangles(&mesh.triangles) {
-        w
-    } else {
-        Weld::identity(n)
-    }
+    Weld::keeping_triangles(mesh, shapes)
 }
 
 /// Says on stderr what `weld` did to the mesh called `what`.

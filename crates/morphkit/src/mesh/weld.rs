@@ -51,6 +51,26 @@ impl Weld {
         Self::of_positions(&[&mesh.positions[..]], tolerance)
     }
 
+    /// The weld of the vertices of `mesh` that coincide in it and in every one of `shapes`
+    /// (each `#V` positions; none: in `mesh` alone), within [`WELD_TOLERANCE`], or the identity
+    /// where it would drop a triangle (so that per-triangle data and correspondences keep their
+    /// triangle ids) or a count differs. What transfer, correspondence, flexibility and
+    /// synthesis weld with.
+    pub fn keeping_triangles(mesh: &TriMesh, shapes: &[&[Point]]) -> Self {
+        let n = mesh.num_vertices();
+        if shapes.iter().any(|s| s.len() != n) {
+            return Self::identity(n);
+        }
+        let mut sets: Vec<&[Point]> = vec![&mesh.positions];
+        sets.extend(shapes.iter().copied());
+        let w = Self::of_positions(&sets, WELD_TOLERANCE);
+        if w.keeps_triangles(&mesh.triangles) {
+            w
+        } else {
+            Self::identity(n)
+        }
+    }
+
     /// [`Weld::of_shapes`] on bare position sets of one vertex count (the first is the base
     /// whose diagonal scales `tolerance`): vertices are welded where they coincide in every set.
     /// Sets of another vertex count than the first weld nothing.

@@ -8,7 +8,7 @@
 //! two layers with the same source reference and markers share one correspondence.
 
 use super::recipe::{PathList, RecipeError, RecipeFile, RegionKind, TranslationKind};
-use super::recipe_weld::{weld_keeping_triangles, welded_correspondence, welded_markers};
+use super::recipe_weld::{welded_correspondence, welded_markers};
 use super::{
     BlendMode, BlendRegion, LayerSpec, PoseSpec, Scribble, SynthError, SynthFrame, SynthOptions,
     Synthesizer, Timing,
@@ -247,7 +247,7 @@ impl RecipeFile {
         for l in read.iter().filter(|l| l.source.is_none()) {
             target_shapes.extend(l.frames.all_positions().iter().map(|p| &p[..]));
         }
-        let target_weld = weld_keeping_triangles(&target, &target_shapes);
+        let target_weld = Weld::keeping_triangles(&target, &target_shapes);
         let welded_target = target_weld.mesh(&target);
         let mut corr_seconds = 0.0;
         let mut cache: HashMap<(PathBuf, PathBuf), Correspondence> = HashMap::new();
@@ -263,7 +263,7 @@ impl RecipeFile {
                 Some((m, _)) => {
                     let all: Vec<&[Point]> =
                         frames.all_positions().iter().map(|p| &p[..]).collect();
-                    weld_keeping_triangles(m, &all)
+                    Weld::keeping_triangles(m, &all)
                 }
                 None => target_weld.clone(),
             };

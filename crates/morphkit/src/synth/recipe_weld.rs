@@ -9,26 +9,9 @@
 //! synthesised on the welded target and scattered back to the target's own layout
 //! ([`super::BuiltRecipe::frame`]).
 
-use crate::mesh::{Point, TriMesh, Weld, WELD_TOLERANCE};
+use crate::mesh::{TriMesh, Weld};
 use crate::synth::{Scribble, SynthError};
 use crate::transfer::{Correspondence, Markers};
-
-/// The weld of the vertices of `mesh` that coincide in it and in every one of `shapes` (each
-/// `#V` positions), or the identity where it would drop a triangle or a count differs.
-pub fn weld_keeping_triangles(mesh: &TriMesh, shapes: &[&[Point]]) -> Weld {
-    let n = mesh.num_vertices();
-    if shapes.iter().any(|s| s.len() != n) {
-        return Weld::identity(n);
-    }
-    let mut sets: Vec<&[Point]> = vec![&mesh.positions];
-    sets.extend(shapes.iter().copied());
-    let w = Weld::of_positions(&sets, WELD_TOLERANCE);
-    if w.keeps_triangles(&mesh.triangles) {
-        w
-    } else {
-        Weld::identity(n)
-    }
-}
 
 /// The triangle mask of `scribble` on the input `mesh` (range checks in its numbering), taken
 /// on the welded mesh for a vertex scribble: a triangle whose corners are scribbled copies of
