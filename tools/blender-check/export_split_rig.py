@@ -3,9 +3,12 @@ connectivity become one mesh with a shape key, a cylindrical UV map and a materi
 GLB with its morph target. Shading `flat` (the default) makes the glTF exporter split every
 triangle into its own three vertices; `smooth` keeps shared vertices except along the UV map's
 seam, where the map wraps from u = 1 back to 0 (the split an artist's smooth, unwrapped
-character gets).
+character gets); `artist` is smooth with Blender's Smart UV Project islands (seams wherever
+the unwrap cuts) and two materials, the second with an image texture (a generated checker,
+packed into the GLB), so the exporter also splits the mesh into two primitives at the
+material border.
 
-    blender -b --python export_split_rig.py -- BASE.obj TARGET.obj OUT.glb [flat|smooth] [apply]
+    blender -b --python export_split_rig.py -- BASE.obj TARGET.obj OUT.glb [flat|smooth|artist] [apply]
 
 `apply` bakes the importer's object rotation (OBJ is Y-up) into the vertices, so the exported
 node has no transform and the mesh's own space is the world's (what a viewer check compares).
@@ -19,7 +22,8 @@ import bpy
 
 args = sys.argv[sys.argv.index("--") + 1:]
 base_path, target_path, out = args[:3]
-smooth = len(args) > 3 and args[3] == "smooth"
+mode = args[3] if len(args) > 3 else "flat"
+smooth = mode in ("smooth", "artist")
 apply = len(args) > 4 and args[4] == "apply"
 for o in list(bpy.data.objects):
     bpy.data.objects.remove(o)
@@ -64,6 +68,26 @@ for poly in mesh.polygons:
 mesh.materials.append(bpy.data.materials.new("skin"))
 base.select_set(True)
 bpy.context.view_layer.objects.active = base
+if mode == "artist":
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.uv.smart_project(angle_limit=math.radians(66), island_margin=0.02)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    image = bpy.data.images.new("checker", width=64, height=64)
+    image.generated_type = "COLOR_GRID"
+    image.pack()
+    cloth = bpy.data.materials.new("cloth")
+    cloth.use_nodes = True
+    tex = cloth.node_tree.nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    bsdf = cloth.node_tree.nodes["Principled BSDF"]
+    cloth.node_tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+    mesh.materials.append(cloth)
+    # The faces on one side of the mesh's middle (along its longest axis) wear the cloth.
+    axis = max(range(3), key=lambda a: max(v.co[a] for v in mesh.vertices) - min(v.co[a] for v in mesh.vertices))
+    middle = sum(v.co[axis] for v in mesh.vertices) / len(mesh.vertices)
+    for poly in mesh.polygons:
+        poly.material_index = 1 if poly.center[axis] > middle else 0
 bpy.ops.export_scene.gltf(
     filepath=out, export_format="GLB", export_morph=True, use_selection=True, export_yup=False
 )

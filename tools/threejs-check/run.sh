@@ -49,9 +49,11 @@ node "$here/check.mjs" --shots "$out/shots" \
 node "$here/check.mjs" --tol 1e-4 --shots "$out/shots" "$out/tube2100-packed.glb" "$out/tube2100" \
   | tee -a "$out/results.jsonl"
 # An artist's own asset (issue 37): Blender exports the cylinder rig flat shaded (every triangle
-# its own vertices) with a UV map, a material and a shape key; `blend --rig` solves it welded
-# and adds the physical clip to that asset, which three.js plays key by key like the OBJ frames
-# of the same blend. Needs Blender (CI installs it); skipped with a message without it.
+# its own vertices) with a UV map, a material and a shape key, and again smooth with Smart UV
+# Project seams and two materials, one with an image texture (two primitives); `blend --rig`
+# solves each welded and adds the physical clip to that asset, which three.js plays key by key
+# like the OBJ frames of the same blend (the textured one's shots show the texture). Needs
+# Blender (CI installs it); skipped with a message without it.
 if command -v blender >/dev/null 2>&1; then
   # The cylinder's OBJ faces name texture coordinates the file does not have, and Blender's
   # importer drops such faces: Blender gets plain copies (through PLY, so no OBJ record stays).
@@ -59,15 +61,17 @@ if command -v blender >/dev/null 2>&1; then
     "$bin" convert "$cyl/cylinder-$shape.obj" "$out/plain-$shape.ply" --force 2>/dev/null
     "$bin" convert "$out/plain-$shape.ply" "$out/plain-$shape.obj" --force 2>/dev/null
   done
-  blender -b --factory-startup --python "$here/../blender-check/export_split_rig.py" -- \
-    "$out/plain-rest.obj" "$out/plain-bend-4.obj" "$out/artist-rig.glb" flat apply >/dev/null
   printf 'bend\n0\n0.25\n0.5\n0.75\n1\n' >"$out/artist-weights.csv"
-  "$bin" blend --rig "$out/artist-rig.glb" --weights-file "$out/artist-weights.csv" \
-    --out "$out/artist-physical.glb" --force
-  "$bin" blend --rig "$out/artist-rig.glb" --weights-file "$out/artist-weights.csv" \
-    --out "$out/artist-physical" --force
-  node "$here/check.mjs" --shots "$out/shots" "$out/artist-physical.glb" "$out/artist-physical" \
-    | tee -a "$out/results.jsonl"
+  for mode in flat artist; do
+    blender -b --factory-startup --python "$here/../blender-check/export_split_rig.py" -- \
+      "$out/plain-rest.obj" "$out/plain-bend-4.obj" "$out/$mode-rig.glb" $mode apply >/dev/null
+    "$bin" blend --rig "$out/$mode-rig.glb" --weights-file "$out/artist-weights.csv" \
+      --out "$out/$mode-physical.glb" --force
+    "$bin" blend --rig "$out/$mode-rig.glb" --weights-file "$out/artist-weights.csv" \
+      --out "$out/$mode-physical" --force
+  done
+  node "$here/check.mjs" --shots "$out/shots" "$out/flat-physical.glb" "$out/flat-physical" \
+    "$out/artist-physical.glb" "$out/artist-physical" | tee -a "$out/results.jsonl"
 else
   echo "threejs-check: no blender on the PATH; the artist's-asset check is skipped" >&2
 fi
