@@ -3,8 +3,8 @@
 //! two materials, one textured (`tools/blender-check/export_split_rig.py ... artist`), so the
 //! exporter splits vertices at every UV seam and the mesh into two primitives. `blend --rig`
 //! then solves it welded and adds the physical clip to that asset:
-//! - the split result equals the blend of the unsplit cylinder (every exported vertex, within
-//!   1e-6 of the diagonal, the exporter's f32 rounding);
+//! - the split result equals the blend of the same mesh unsplit (the cylinder's connectivity
+//!   with the exported f32 positions) within 1e-9 of the diagonal, every exported vertex;
 //! - materials, the texture and its image, UV sets, primitives and the node come back as they
 //!   were (JSON compared), and the Khronos validator finds no error;
 //! - Blender imports the result: one object with the shape keys, and its last animation frame
@@ -15,10 +15,9 @@
 
 mod common;
 #[path = "../../morphkit/tests/common/gltf_asset.rs"]
-#[allow(dead_code)]
 mod fixture;
 
-use common::split::{diagonal, read};
+use common::split::{diagonal, read, write};
 use common::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -53,8 +52,8 @@ fn blender(script: &str, args: &[&str]) -> String {
         .args(args)
         .output()
         .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout).into_owned()
-        + &String::from_utf8_lossy(&out.stderr);
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "blender {script} failed: {text}");
     text
 }
@@ -114,8 +113,15 @@ fn an_artists_textured_two_material_export_blends_closed_and_comes_back_whole() 
     let mut plain = Vec::new();
     for shape in ["rest", "bend-4"] {
         let src = cyl.join(format!("cylinder-{shape}.obj"));
-        assert!(src.is_file(), "MORPHKIT_DATA is set but {} is missing", src.display());
-        let (ply, obj) = (d.join(format!("{shape}.ply")), d.join(format!("{shape}.obj")));
+        assert!(
+            src.is_file(),
+            "MORPHKIT_DATA is set but {} is missing",
+            src.display()
+        );
+        let (ply, obj) = (
+            d.join(format!("{shape}.ply")),
+            d.join(format!("{shape}.obj")),
+        );
         ok(&["convert", s(&src), s(&ply)]);
         ok(&["convert", s(&ply), s(&obj)]);
         plain.push(obj);
@@ -128,7 +134,9 @@ fn an_artists_textured_two_material_export_blends_closed_and_comes_back_whole() 
     let input = fixture::json_of(&rig);
     let prims = input["meshes"][0]["primitives"].as_array().unwrap();
     assert_eq!(prims.len(), 2, "one primitive per material");
-    assert!(prims.iter().all(|p| p["attributes"].get("TEXCOORD_0").is_some()));
+    assert!(prims
+        .iter()
+        .all(|p| p["attributes"].get("TEXCOORD_0").is_some()));
     assert_eq!(input["images"].as_array().map(Vec::len), Some(1));
 
     let weights = d.join("keys.csv");
@@ -147,16 +155,10 @@ fn an_artists_textured_two_material_export_blends_closed_and_comes_back_whole() 
         ]);
         assert!(err.contains("welded"), "{err}");
     }
-    // The split, two-primitive export equals the unsplit cylinder's blend.
-    let reference = d.join("reference");
-    let unnamed = d.join("unnamed.csv");
-    std::fs::write(&unnamed, "0\n0.25\n0.5\n0.75\n1\n").unwrap();
-    ok(&blend_args(
-        &plain[0],
-        &plain[1],
-        &["--weights-file", s(&unnamed), "--out", s(&reference)],
-    ));
-    let rest = read(&plain[0]).0;
+    // The split, two-primitive export equals the blend of the same mesh unsplit: the
+    // cylinder's connectivity with the exported (f32) positions of base and target (frames 0
+    // and 4, the endpoints, are the shapes themselves).
+    let (rest, faces) = read(&plain[0]);
     let diag = diagonal(&rest);
     let exported = read(&frames.join("frame_0000.obj")).0;
     assert!(exported.len() > rest.len(), "the export splits vertices");
@@ -172,12 +174,37 @@ fn an_artists_textured_two_material_export_blends_closed_and_comes_back_whole() 
             v
         })
         .collect();
+    let unsplit = |k: usize, path: &Path| {
+        let mut v = rest.clone();
+        for (p, &i) in read(&frames.join(format!("frame_{k:04}.obj")))
+            .0
+            .iter()
+            .zip(&ids)
+        {
+            v[i] = *p;
+        }
+        write(path, &(v, faces.clone()));
+    };
+    let (base32, target32) = (d.join("base32.obj"), d.join("target32.obj"));
+    unsplit(0, &base32);
+    unsplit(4, &target32);
+    let reference = d.join("reference");
+    let unnamed = d.join("unnamed.csv");
+    std::fs::write(&unnamed, "0\n0.25\n0.5\n0.75\n1\n").unwrap();
+    ok(&blend_args(
+        &base32,
+        &target32,
+        &["--weights-file", s(&unnamed), "--out", s(&reference)],
+    ));
     for k in 0..5 {
         let got = read(&frames.join(format!("frame_{k:04}.obj"))).0;
         let want = read(&reference.join(format!("frame_{k:04}.obj"))).0;
         for (g, &v) in got.iter().zip(&ids) {
             let e = dist(*g, want[v]) / diag;
-            assert!(e < 1e-6, "frame {k}: {e} of the diagonal from the unsplit blend");
+            assert!(
+                e < 1e-9,
+                "frame {k}: {e} of the diagonal from the unsplit blend"
+            );
         }
     }
     // The asset comes back whole: everything but the edited data is as Blender wrote it.
