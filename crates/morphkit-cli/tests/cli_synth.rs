@@ -3,38 +3,13 @@
 mod common;
 use common::*;
 
-use morphkit::io::{read_animation, read_mesh, write_mesh};
-use morphkit::mesh::generate;
+use morphkit::io::{read_animation, read_mesh};
 use std::path::{Path, PathBuf};
 
-/// A bar, four bent frames and scribbles of its two halves.
+/// A bar, four bent frames and scribbles of its two halves ([`synth_bar`]).
 fn setup(name: &str) -> PathBuf {
     let d = tmp_dir(name);
-    std::fs::create_dir_all(d.join("frames")).unwrap();
-    let bar = generate::bar(4.0, 0.5, 2, 32);
-    write_mesh(&d.join("bar.obj"), &bar).unwrap();
-    for k in 0..4 {
-        let a = (k as f64 + 1.0) * 30f64.to_radians();
-        let bent = bar.with_positions(generate::bend(&bar.positions, 1.9, 0.25, a));
-        write_mesh(&d.join(format!("frames/bend-{k}.obj")), &bent).unwrap();
-    }
-    let x = |t: usize| {
-        (0..3)
-            .map(|k| bar.positions[bar.triangles[t][k] as usize][0])
-            .sum::<f64>()
-            / 3.0
-    };
-    let far: Vec<usize> = (0..bar.num_triangles()).filter(|&t| x(t) > 2.3).collect();
-    std::fs::write(
-        d.join("far.json"),
-        serde_json::json!({ "triangles": far }).to_string(),
-    )
-    .unwrap();
-    std::fs::write(
-        d.join("recipe.toml"),
-        "target = \"bar.obj\"\nframes = 4\n[[layer]]\nsource_frames = \"frames\"\nscribble = \"far.json\"\n",
-    )
-    .unwrap();
+    synth_bar(&d);
     d
 }
 

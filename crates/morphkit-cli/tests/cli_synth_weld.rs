@@ -6,44 +6,13 @@ mod common;
 use common::split::{diagonal, read, Split};
 use common::*;
 
-use morphkit::io::write_mesh;
-use morphkit::mesh::generate;
 use std::path::Path;
-
-/// A bar, four bent frames, a scribble of its far half and a recipe, in `d`.
-fn setup(d: &Path) {
-    std::fs::create_dir_all(d.join("frames")).unwrap();
-    let bar = generate::bar(4.0, 0.5, 2, 32);
-    write_mesh(&d.join("bar.obj"), &bar).unwrap();
-    for k in 0..4 {
-        let a = (k as f64 + 1.0) * 30f64.to_radians();
-        let bent = bar.with_positions(generate::bend(&bar.positions, 1.9, 0.25, a));
-        write_mesh(&d.join(format!("frames/bend-{k}.obj")), &bent).unwrap();
-    }
-    let x = |t: usize| {
-        (0..3)
-            .map(|k| bar.positions[bar.triangles[t][k] as usize][0])
-            .sum::<f64>()
-            / 3.0
-    };
-    let far: Vec<usize> = (0..bar.num_triangles()).filter(|&t| x(t) > 2.3).collect();
-    std::fs::write(
-        d.join("far.json"),
-        serde_json::json!({ "triangles": far }).to_string(),
-    )
-    .unwrap();
-    std::fs::write(
-        d.join("recipe.toml"),
-        "target = \"bar.obj\"\nframes = 4\n[[layer]]\nsource_frames = \"frames\"\nscribble = \"far.json\"\n",
-    )
-    .unwrap();
-}
 
 #[test]
 fn synth_of_a_split_target_equals_the_unsplit_one_in_its_own_layout() {
     let (du, ds) = (tmp_dir("synth-weld-u"), tmp_dir("synth-weld-s"));
-    setup(&du);
-    setup(&ds);
+    synth_bar(&du);
+    synth_bar(&ds);
     // The split target and frames (faces keep their order, so the scribble holds), shuffled.
     let names: Vec<String> = std::iter::once("bar.obj".to_string())
         .chain((0..4).map(|k| format!("frames/bend-{k}.obj")))

@@ -40,6 +40,27 @@ pub(super) enum Scalar {
 }
 
 impl Scalar {
+    /// The value of `bytes` (exactly [`Scalar::size`] of them) in this type, little endian
+    /// unless `big`.
+    pub(super) fn decode(self, bytes: &[u8], big: bool) -> f64 {
+        let n = self.size();
+        let mut a = [0u8; 8];
+        a[..n].copy_from_slice(&bytes[..n]);
+        if big {
+            a[..n].reverse();
+        }
+        match self {
+            Scalar::I8 => a[0] as i8 as f64,
+            Scalar::U8 => a[0] as f64,
+            Scalar::I16 => i16::from_le_bytes([a[0], a[1]]) as f64,
+            Scalar::U16 => u16::from_le_bytes([a[0], a[1]]) as f64,
+            Scalar::I32 => i32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+            Scalar::U32 => u32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+            Scalar::F32 => f32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+            Scalar::F64 => f64::from_le_bytes(a),
+        }
+    }
+
     fn parse(s: &str) -> Option<Scalar> {
         Some(match s {
             "char" | "int8" => Scalar::I8,
@@ -218,21 +239,7 @@ impl<'a> Values<'a, '_> {
                     ));
                 };
                 *pos += n;
-                let mut a = [0u8; 8];
-                a[..n].copy_from_slice(b);
-                if *big {
-                    a[..n].reverse();
-                }
-                Ok(match s {
-                    Scalar::I8 => a[0] as i8 as f64,
-                    Scalar::U8 => a[0] as f64,
-                    Scalar::I16 => i16::from_le_bytes([a[0], a[1]]) as f64,
-                    Scalar::U16 => u16::from_le_bytes([a[0], a[1]]) as f64,
-                    Scalar::I32 => i32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-                    Scalar::U32 => u32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-                    Scalar::F32 => f32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-                    Scalar::F64 => f64::from_le_bytes(a),
-                })
+                Ok(s.decode(b, *big))
             }
             Body::Ascii { .. } => {
                 let Some(tok) = self.toks.get(self.next_tok) else {

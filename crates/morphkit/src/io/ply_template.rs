@@ -296,21 +296,7 @@ fn scalar_at(b: &[u8], pos: usize, s: Scalar, big: bool) -> Result<f64, String> 
     let bytes = b
         .get(pos..pos + n)
         .ok_or_else(|| format!("the file ends at byte {pos}"))?;
-    let mut a = [0u8; 8];
-    a[..n].copy_from_slice(bytes);
-    if big {
-        a[..n].reverse();
-    }
-    Ok(match s {
-        Scalar::I8 => a[0] as i8 as f64,
-        Scalar::U8 => a[0] as f64,
-        Scalar::I16 => i16::from_le_bytes([a[0], a[1]]) as f64,
-        Scalar::U16 => u16::from_le_bytes([a[0], a[1]]) as f64,
-        Scalar::I32 => i32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-        Scalar::U32 => u32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-        Scalar::F32 => f32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-        Scalar::F64 => f64::from_le_bytes(a),
-    })
+    Ok(s.decode(bytes, big))
 }
 
 /// The byte after the binary property value at `pos`.

@@ -50,26 +50,4 @@ impl FrameSolver<'_> {
         };
         self.rig.solve(self.ws, &c, targets, from, factor)
     }
-
-    /// The canonical start for `weights` (world positions, `#V`): the predictor plus the
-    /// sampled correction, computing the samples it needs.
-    #[doc(hidden)]
-    pub fn sampled_start(
-        &mut self,
-        weights: &Weights,
-    ) -> Result<Vec<crate::mesh::Point>, BlendError> {
-        let c = weights.coefficients(self.rig.shapes.len())?;
-        let p = self.rig.predicted(&c);
-        let d = self.rig.samples.correction(
-            &c,
-            &mut super::solve::Sampler {
-                rig: self.rig,
-                ws: self.ws,
-            },
-        );
-        Ok(match d {
-            Some(d) => super::sampled_start::shifted(p, &d, 1.0),
-            None => p,
-        })
-    }
 }
