@@ -78,3 +78,13 @@ fn horse_combinations_of_two_poses() {
     });
     check("horse", &s, &w);
 }
+
+#[test]
+fn ict_combinations_of_three_expressions() {
+    let Some(paths) = common::ict_rig_paths() else {
+        return common::skip("ict_combinations_of_three_expressions");
+    };
+    let s = read_shape_set(&paths).unwrap();
+    let w = combinations(s.len() - 1, 12, 3, 40, |r, _| r.random_range(0.3..1.0));
+    check("ict", &s, &w);
+}

@@ -207,6 +207,27 @@ impl Constraints {
         })
     }
 
+    /// Frees the kinematic vertices of components anchored by fixed vertices (those of
+    /// [aligned](Self::aligned) components stay: they are that component's frame) and returns
+    /// them, sorted. A solve then holds them per frame, with the weights of the targets that
+    /// over-stretch them ([`holds`](super::holds)).
+    pub fn release_kinematic(&mut self) -> Vec<u32> {
+        let mut keep = std::collections::BTreeSet::new();
+        for a in &self.aligned {
+            keep.extend(a.held.iter().copied());
+        }
+        let (kept, released): (Vec<u32>, Vec<u32>) =
+            self.kinematic.iter().partition(|v| keep.contains(v));
+        for &v in &released {
+            for a in 0..3 {
+                self.fixed_dof[3 * v as usize + a] = false;
+            }
+        }
+        self.fixed.retain(|v| released.binary_search(v).is_err());
+        self.kinematic = kept;
+        released
+    }
+
     /// Number of free degrees of freedom.
     pub fn num_free_dofs(&self) -> usize {
         self.fixed_dof.iter().filter(|f| !**f).count()
@@ -285,8 +306,20 @@ fn explicit_here(explicit: bool, fixed_here: &[Point]) -> bool {
 /// $G_s = E_s^\top E_s$ of the edge matrices). A triangle that is a sliver in the base and opens
 /// in a target (a closed slit) counts as infinitely stretched.
 pub fn stretched_vertices(shapes: &ShapeSet, threshold: f64) -> Vec<u32> {
+    let mut all: Vec<u32> = stretched_by_target(shapes, threshold)
+        .into_iter()
+        .flatten()
+        .collect();
+    all.sort_unstable();
+    all.dedup();
+    all
+}
+
+/// Per target `s ≥ 1` (entry `s - 1`): the vertices of triangles that target over-stretches,
+/// by the rule of [`stretched_vertices`] (their union), sorted.
+pub fn stretched_by_target(shapes: &ShapeSet, threshold: f64) -> Vec<Vec<u32>> {
     if !threshold.is_finite() {
-        return Vec::new();
+        return vec![Vec::new(); shapes.len().saturating_sub(1)];
     }
     let base = shapes.positions(0);
     let metric = |p: &[Point], t: [u32; 3]| {
@@ -295,36 +328,38 @@ pub fn stretched_vertices(shapes: &ShapeSet, threshold: f64) -> Vec<u32> {
         let d = crate::mesh::dot;
         [d(e1, e1), d(e1, e2), d(e2, e2)]
     };
-    let mut mark = vec![false; shapes.num_vertices()];
-    for &t in shapes.triangles() {
-        let g0 = metric(base, t);
-        let det0 = g0[0] * g0[2] - g0[1] * g0[1];
-        let tr0 = g0[0] + g0[2];
-        let stretched = (1..shapes.len()).any(|s| {
-            let g = metric(shapes.positions(s), t);
-            let det = g[0] * g[2] - g[1] * g[1];
-            if det0 <= 1e-12 * tr0 * tr0 {
-                // A sliver in the base: stretched when it opens up in this shape.
-                return det > 1e-6 * (g[0] + g[2]).powi(2) && tr0 < (g[0] + g[2]);
+    let n = shapes.num_vertices();
+    (1..shapes.len())
+        .map(|s| {
+            let mut mark = vec![false; n];
+            for &t in shapes.triangles() {
+                let g0 = metric(base, t);
+                let det0 = g0[0] * g0[2] - g0[1] * g0[1];
+                let tr0 = g0[0] + g0[2];
+                let g = metric(shapes.positions(s), t);
+                let det = g[0] * g[2] - g[1] * g[1];
+                let stretched = if det0 <= 1e-12 * tr0 * tr0 {
+                    // A sliver in the base: stretched when it opens up in this shape.
+                    det > 1e-6 * (g[0] + g[2]).powi(2) && tr0 < (g[0] + g[2])
+                } else {
+                    // Eigenvalues of G0⁻¹ G are the squared singular values.
+                    let m = [
+                        (g0[2] * g[0] - g0[1] * g[1]) / det0,
+                        (g0[0] * g[2] - g0[1] * g[1]) / det0,
+                    ];
+                    let tr = m[0] + m[1];
+                    let dt = det / det0;
+                    let disc = (0.25 * tr * tr - dt).max(0.0).sqrt();
+                    0.5 * tr + disc > threshold * threshold
+                };
+                if stretched {
+                    for v in t {
+                        mark[v as usize] = true;
+                    }
+                }
             }
-            // Eigenvalues of G0⁻¹ G are the squared singular values.
-            let m = [
-                (g0[2] * g[0] - g0[1] * g[1]) / det0,
-                (g0[0] * g[2] - g0[1] * g[1]) / det0,
-            ];
-            let tr = m[0] + m[1];
-            let dt = det / det0;
-            let disc = (0.25 * tr * tr - dt).max(0.0).sqrt();
-            0.5 * tr + disc > threshold * threshold
-        });
-        if stretched {
-            for v in t {
-                mark[v as usize] = true;
-            }
-        }
-    }
-    (0..mark.len() as u32)
-        .filter(|&v| mark[v as usize])
+            (0..n as u32).filter(|&v| mark[v as usize]).collect()
+        })
         .collect()
 }
 

@@ -92,6 +92,7 @@ mod constraints;
 pub mod continuity;
 mod frame_solver;
 mod gauge;
+mod holds;
 pub mod interior;
 mod memory;
 pub mod metrics;

@@ -37,6 +37,12 @@ pub struct BlendOptions {
     /// the horse poses stretch at most 3 triangles past it (11×), and compress up to 30×,
     /// which never counts.
     pub kinematic_stretch: f64,
+    /// The weight over which per-frame holds fade ([`holds`](super::holds)): a vertex that
+    /// only targets of weight below it move is pulled towards the linear blend, exactly at
+    /// weight 0 as in a rig without those targets; a kinematic vertex is held exactly once a
+    /// target that over-stretches it reaches it, and free at weight 0. So a frame depends only
+    /// on its nonzero weights, and stays continuous as a weight leaves 0. Default `0.05`.
+    pub hold_ramp: f64,
     /// Components every vertex of which lies within this many mesh edges of the boundary, and
     /// at least twice as long as wide, are *thin bands* ([`thin_bands`](super::thin_bands)):
     /// strips and cards such as a face rig's eye-occlusion strips, tear films and eyelashes.
@@ -151,6 +157,9 @@ pub(crate) fn check_options(o: &BlendOptions) -> Result<(), BlendError> {
     if !(o.min_rest_fraction > 0.0 && o.min_rest_fraction < 1.0) {
         return bad("min_rest_fraction", "in (0, 1)", o.min_rest_fraction);
     }
+    if !(o.hold_ramp.is_finite() && o.hold_ramp > 0.0 && o.hold_ramp <= 1.0) {
+        return bad("the hold ramp", "in (0, 1]", o.hold_ramp);
+    }
     if o.kinematic_stretch.is_nan() || o.kinematic_stretch <= 1.0 {
         return bad(
             "the kinematic stretch",
@@ -254,6 +263,7 @@ impl Default for BlendOptions {
             max_newton_iterations: 300,
             min_rest_fraction: 0.05,
             kinematic_stretch: 10.0,
+            hold_ramp: 0.05,
             thin_band_rings: 4,
             tether: 1e-5,
             armijo: 1e-4,

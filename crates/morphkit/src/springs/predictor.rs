@@ -18,6 +18,7 @@
 
 use super::gauge::rotate_into;
 use super::rig::Rig;
+use super::terms::PointTarget;
 use super::{BlendError, Constraints, Weights};
 use crate::geom::kabsch;
 use crate::mesh::{Point, ShapeSet};
@@ -79,9 +80,23 @@ pub(crate) fn output(constraints: &Constraints, x: &[f64], lin: &[Point]) -> Vec
 
 impl Rig {
     /// The rotation-aware prediction for coefficients `c` (world coordinates, fixed vertices
-    /// at `lin`, the linear blend), or `None` where the linear blend is the predictor.
-    pub(super) fn rotation_prediction(&self, c: &[f64], lin: &[Point]) -> Option<Vec<Point>> {
-        self.rotation.as_ref()?.predict(c, lin, &self.is_fixed)
+    /// and the frame's hard `holds` at `lin`, the linear blend), or `None` where the linear
+    /// blend is the predictor.
+    pub(super) fn rotation_prediction(
+        &self,
+        c: &[f64],
+        lin: &[Point],
+        holds: &[PointTarget],
+    ) -> Option<Vec<Point>> {
+        let rotation = self.rotation.as_ref()?;
+        if !holds.iter().any(|h| h.is_hard()) {
+            return rotation.predict(c, lin, &self.is_fixed);
+        }
+        let mut fixed = self.is_fixed.clone();
+        for h in holds.iter().filter(|h| h.is_hard()) {
+            fixed[h.vertex as usize] = true;
+        }
+        rotation.predict(c, lin, &fixed)
     }
 
     /// Where a solve starts, in solver coordinates: `start_from` (with fixed vertices at
@@ -117,7 +132,8 @@ impl Rig {
     /// The predictor $P(c)$ in world coordinates.
     pub(super) fn predicted(&self, c: &[f64]) -> Vec<Point> {
         let lin = linear(&self.shapes, c);
-        self.world_prediction(&lin, self.rotation_prediction(c, &lin).as_deref())
+        let holds = self.holds.targets(c, &lin);
+        self.world_prediction(&lin, self.rotation_prediction(c, &lin, &holds).as_deref())
     }
 }
 

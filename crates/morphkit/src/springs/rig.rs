@@ -9,7 +9,8 @@
 //! Nothing here solves; the fields computed on first need (sampled starts, references) are
 //! filled by the solve layer above through [`super::sampled_start::SampleSolver`].
 
-use super::constraints::{stretched_vertices, thin_bands, Components, Constraints};
+use super::constraints::{stretched_by_target, thin_bands, Components, Constraints};
+use super::holds::FrameHolds;
 use super::newton::Workspace;
 use super::options::{check_options, BlendOptions, LinearSolver, RigSummary};
 use super::reference::References;
@@ -36,6 +37,8 @@ pub(super) struct Rig {
     pub(super) rotation: Option<RotationPredictor>,
     /// Per vertex: held at the linear blend by a boundary condition (not the bands).
     pub(super) is_fixed: Vec<bool>,
+    /// What each frame holds besides, from its weights.
+    pub(super) holds: FrameHolds,
     /// Each target's correction fields of the sampled start.
     pub(super) samples: StartSamples,
     /// The aggregation cycle's pattern, when it preconditions instead of the factor.
@@ -112,7 +115,8 @@ impl Rig {
             &o.hinges,
             mean_stiffness,
             mean_square_length,
-        );
+        )
+        .fading(o.hold_ramp);
         let mut summary = RigSummary {
             vertices: n,
             springs: springs.len(),
@@ -143,12 +147,25 @@ impl Rig {
             t.bind(&block_pattern);
         }
         let components = Components::from_pairs(n, pairs);
-        let kinematic = stretched_vertices(shapes, o.kinematic_stretch);
+        let stretched_by = stretched_by_target(shapes, o.kinematic_stretch);
+        let mut kinematic: Vec<u32> = stretched_by.iter().flatten().copied().collect();
+        kinematic.sort_unstable();
+        kinematic.dedup();
         let bands = thin_bands(&topology, &components, o.thin_band_rings);
-        let constraints = Constraints::new(shapes, &components, &o.fixed, &kinematic, &bands)?;
+        let mut constraints =
+            Constraints::new(shapes, &components, &o.fixed, &kinematic, &bands)?;
         summary.fixed_vertices =
             constraints.fixed.len() - constraints.kinematic.len() - constraints.bands.len();
         summary.kinematic_vertices = constraints.kinematic.len();
+        let released = constraints.release_kinematic();
+        let holds = FrameHolds::new(
+            shapes,
+            &constraints,
+            &released,
+            &stretched_by,
+            o.fixed == super::FixedVertices::Auto,
+            o.hold_ramp,
+        );
         summary.band_vertices = constraints.bands.len();
         summary.gauged_components = constraints.gauges.len() + constraints.aligned.len();
         let vertex_order = match o.ordering {
@@ -231,6 +248,7 @@ impl Rig {
                 mean_stiffness,
                 rotation,
                 is_fixed,
+                holds,
                 samples: StartSamples::new(shapes.len() - 1),
                 references: References::new(summary.reference_targets),
                 aggregation,

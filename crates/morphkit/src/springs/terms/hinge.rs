@@ -26,8 +26,13 @@
 //! The projected Hessian is Gauss–Newton, $2 \mu b_h J^\top J$ (positive semi-definite); the
 //! exact one adds the second-order part in closed form.
 //!
-//! Hinges are left out where the dihedral angle is ill defined in some shape: a face of
-//! (nearly) zero area, an edge of zero length, or a fold within `min_fold_margin` of ±π.
+//! A hinge is left out where its dihedral angle is ill defined in the base: a face of (nearly)
+//! zero area, an edge of zero length, or a fold within `min_fold_margin` of ±π. Where it is ill
+//! defined only in some targets, it fades out with their largest weight $m$ (issue 40: a frame
+//! must not depend on targets at weight 0): its energy is scaled by $((r - m)/r)^2$ for
+//! $m < r$ and is zero from $m = r$ on, $r$ the rig's hold ramp ([`HingeTerm::fading`]); such
+//! a target's angle and normal lengths are the measured ones at a fold, the base's at a
+//! degenerate face.
 
 use super::{
     Block, BlockHessian, BlockPattern, EnergyTerm, HessianKind, PairSlots, TermParameters,
@@ -76,6 +81,10 @@ pub struct HingeTerm {
     floor2: Vec<f64>,
     /// The blocks of each hinge's six pairs (`PAIRS` order) in the solver's pattern.
     slots: PairSlots,
+    /// `(hinge, shape)`: the targets in which a hinge's angle is ill defined, by hinge.
+    ill: Vec<(u32, u32)>,
+    /// The weight over which a hinge fades out with such a target.
+    ramp: f64,
 }
 
 /// The corner pairs `(u, v)`, `u < v`, of a hinge `[a, b, c, d]`, in the order of its slots:
@@ -134,6 +143,8 @@ impl HingeTerm {
             floor1: Vec::new(),
             floor2: Vec::new(),
             slots: PairSlots::default(),
+            ill: Vec::new(),
+            ramp: 0.05,
         };
         if mu <= 0.0 {
             return out;
@@ -152,19 +163,23 @@ impl HingeTerm {
             }
             let h = [a, b, c, d];
             let mut m = Vec::with_capacity(shapes.len());
-            for x in &flat {
+            let mut ill = Vec::new();
+            for (s, x) in flat.iter().enumerate() {
                 let (theta, l1, l2, le) = measure(x, h);
-                if l1 <= area_eps || l2 <= area_eps || le <= 1e-12 * diag {
-                    continue 'edges;
+                let degenerate = l1 <= area_eps || l2 <= area_eps || le <= 1e-12 * diag;
+                if degenerate || theta.abs() > PI - options.min_fold_margin {
+                    if s == 0 {
+                        continue 'edges;
+                    }
+                    ill.push(s as u32);
                 }
-                if theta.abs() > PI - options.min_fold_margin {
-                    continue 'edges;
-                }
-                m.push((theta, l1, l2));
+                m.push(if degenerate { m[0] } else { (theta, l1, l2) });
             }
             let theta0 = m[0].0;
             let (_, l1, l2, le) = measure(&flat[0], h);
             let shape_factor = (2.0 * le * le / (l1 + l2)).min(options.max_shape_factor);
+            let k = out.hinges.len() as u32;
+            out.ill.extend(ill.iter().map(|&s| (k, s)));
             out.hinges.push(h);
             out.weight.push(mu * shape_factor);
             let (mut lo1, mut lo2) = (f64::INFINITY, f64::INFINITY);
@@ -174,13 +189,22 @@ impl HingeTerm {
                 out.angle[s].push(theta0 + d);
                 out.len1[s].push(l1);
                 out.len2[s].push(l2);
-                lo1 = lo1.min(l1);
-                lo2 = lo2.min(l2);
+                if !ill.contains(&(s as u32)) {
+                    lo1 = lo1.min(l1);
+                    lo2 = lo2.min(l2);
+                }
             }
             out.floor1.push(0.05 * lo1);
             out.floor2.push(0.05 * lo2);
         }
         out
+    }
+
+    /// Hinges ill defined in a target fade out as its weight goes from 0 to `ramp` (module
+    /// doc). Default `0.05`.
+    pub fn fading(mut self, ramp: f64) -> Self {
+        self.ramp = ramp;
+        self
     }
 
     /// Number of hinges.
@@ -475,6 +499,14 @@ impl EnergyTerm for HingeTerm {
                 }
             }
         }
+        // √ of each hinge's fade: ρ is linear in (1/β₁, 1/β₂), so scaling both scales E by
+        // the fade.
+        let mut fade = vec![1.0; m];
+        for &(k, s) in &self.ill {
+            let w = c.get(s as usize).map_or(0.0, |w| w.abs());
+            let f = ((self.ramp - w) / self.ramp).max(0.0);
+            fade[k as usize] = f64::min(fade[k as usize], f);
+        }
         let mut values = Vec::with_capacity(4 * m);
         let mut clamped = 0;
         for k in 0..m {
@@ -484,8 +516,8 @@ impl EnergyTerm for HingeTerm {
             values.extend_from_slice(&[
                 theta[k].cos(),
                 theta[k].sin(),
-                1.0 / b1[k].max(self.floor1[k]),
-                1.0 / b2[k].max(self.floor2[k]),
+                fade[k] / b1[k].max(self.floor1[k]),
+                fade[k] / b2[k].max(self.floor2[k]),
             ]);
         }
         TermParameters { values, clamped }
