@@ -21,19 +21,9 @@ fn ict_frame_is_the_same_in_a_two_shape_rig_and_the_full_rig() {
     let two = read_shape_set(&[paths[0].clone(), paths[jaw + 1].clone()]).unwrap();
     let d = bbox_diagonal(full.positions(0));
     let topo = Topology::new(full.num_vertices(), full.triangles());
-    let o = BlendOptions {
-        gradient_tolerance: std::env::var("GT").map(|v| v.parse().unwrap()).unwrap_or(1e-6),
-        tether: std::env::var("TETHER").map(|v| v.parse().unwrap()).unwrap_or(1e-5),
-        sampled_start: std::env::var("NOSS").is_err(),
-        hinges: morphkit::springs::HingeOptions {
-            weight: std::env::var("HW").map(|v| v.parse().unwrap()).unwrap_or(morphkit::springs::HingeOptions::default().weight),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let o = BlendOptions::default();
     let mut small = PhysicalBlend::new(&two, &o).unwrap();
     let mut big = PhysicalBlend::new(&full, &o).unwrap();
-    eprintln!("small {:?}\nbig {:?}", small.summary(), big.summary());
     for a in [0.25, 0.5, 0.75] {
         let mut w = vec![0.0; ICT.len()];
         w[jaw] = a;

@@ -109,7 +109,8 @@ pub struct FoldMetrics {
     pub folds: usize,
     /// The same count for the linear blend.
     pub folds_linear: usize,
-    /// Interior edges whose signed dihedral angle is more than 30° off the blended angle.
+    /// Interior edges whose signed dihedral angle is more than 30° off the blended angle
+    /// (among those whose angle is well defined in every shape with a nonzero coefficient).
     pub creases: usize,
     /// The same count for the linear blend.
     pub creases_linear: usize,
@@ -161,6 +162,9 @@ pub fn fold_metrics(
         let x: Vec<f64> = p.iter().flatten().copied().collect();
         (0..hinges.len())
             .filter(|&k| {
+                if !hinges.defined_at(k, &c) {
+                    return false;
+                }
                 let mut d = hinges.angle_at(&x, k) - target[k];
                 d -= std::f64::consts::TAU * (d / std::f64::consts::TAU).round();
                 d.abs() > 30f64.to_radians()

@@ -207,6 +207,16 @@ impl HingeTerm {
         self
     }
 
+    /// Whether hinge `k`'s angle is well defined in every shape with a nonzero coefficient
+    /// in `c` (it always is in the base).
+    pub fn defined_at(&self, k: usize, c: &[f64]) -> bool {
+        let from = self.ill.partition_point(|&(h, _)| (h as usize) < k);
+        self.ill[from..]
+            .iter()
+            .take_while(|&&(h, _)| h as usize == k)
+            .all(|&(_, s)| c.get(s as usize).is_none_or(|&w| w == 0.0))
+    }
+
     /// Number of hinges.
     pub fn len(&self) -> usize {
         self.hinges.len()
