@@ -199,7 +199,6 @@ impl AnchorMotion {
                 fit.rotation,
             ));
             logs.push(q.scaled_axis());
-            eprintln!("DBG anchor {:?} {:?} {:?}", fit.rotation, logs.last(), p);
             displacements.push(fit.rotation * a + fit.translation - a);
         }
         Self {
