@@ -49,19 +49,19 @@ pub fn curled_tail(bend_deg: f64, roll_deg: f64) -> ShapeSet {
 impl Tail {
     /// The straight tube and the curled one.
     pub fn shapes(&self) -> ShapeSet {
-    let m = generate::tube(self.radius, self.length, self.around, self.along, true);
-    let (attach, curl, roll_deg) = (self.attach, self.curl, self.roll_deg);
-    let rolled: Vec<Point> = m
-        .positions
-        .iter()
-        .map(|&p| {
-            let f = ((p[0] - attach) / curl).clamp(0.0, 1.0);
-            let (s, c) = (f * roll_deg.to_radians()).sin_cos();
-            [p[0], c * p[1] - s * p[2], s * p[1] + c * p[2]]
-        })
-        .collect();
-    let curled = generate::bend(&rolled, attach, curl, self.bend_deg.to_radians());
-    super::two_shapes(&m, "rest", ("curled", curled))
+        let m = generate::tube(self.radius, self.length, self.around, self.along, true);
+        let (attach, curl, roll_deg) = (self.attach, self.curl, self.roll_deg);
+        let rolled: Vec<Point> = m
+            .positions
+            .iter()
+            .map(|&p| {
+                let f = ((p[0] - attach) / curl).clamp(0.0, 1.0);
+                let (s, c) = (f * roll_deg.to_radians()).sin_cos();
+                [p[0], c * p[1] - s * p[2], s * p[1] + c * p[2]]
+            })
+            .collect();
+        let curled = generate::bend(&rolled, attach, curl, self.bend_deg.to_radians());
+        super::two_shapes(&m, "rest", ("curled", curled))
     }
 }
 
@@ -103,32 +103,32 @@ pub fn tail_shape(shapes: &ShapeSet, p: &[Point]) -> TailShape {
 impl Tail {
     /// Measures positions `p` of [`Tail::shapes`] against the rest shape.
     pub fn shape(&self, shapes: &ShapeSet, p: &[Point]) -> TailShape {
-    let (around, along) = (self.around, self.along);
-    let rest = shapes.positions(0);
-    let (mut length, mut twist, mut max_seg) = (0.0, 0.0, 0.0f64);
-    let mut prev: Option<(Vector3<f64>, UnitQuaternion<f64>)> = None;
-    for j in 0..=along {
-        let (c, now) = ring(p, around, j);
-        let (_, then) = ring(rest, around, j);
-        let q = ring_rotation(&then, &now);
-        if let Some((c0, q0)) = prev {
-            length += (c - c0).norm();
-            // Rest rings face +x: the twist is the relative rotation's part about x.
-            let rel = q0.inverse() * q;
-            let mut a = 2.0 * rel.i.atan2(rel.w);
-            a -= std::f64::consts::TAU * (a / std::f64::consts::TAU).round();
-            twist += a;
-            max_seg = max_seg.max(a.abs());
+        let (around, along) = (self.around, self.along);
+        let rest = shapes.positions(0);
+        let (mut length, mut twist, mut max_seg) = (0.0, 0.0, 0.0f64);
+        let mut prev: Option<(Vector3<f64>, UnitQuaternion<f64>)> = None;
+        for j in 0..=along {
+            let (c, now) = ring(p, around, j);
+            let (_, then) = ring(rest, around, j);
+            let q = ring_rotation(&then, &now);
+            if let Some((c0, q0)) = prev {
+                length += (c - c0).norm();
+                // Rest rings face +x: the twist is the relative rotation's part about x.
+                let rel = q0.inverse() * q;
+                let mut a = 2.0 * rel.i.atan2(rel.w);
+                a -= std::f64::consts::TAU * (a / std::f64::consts::TAU).round();
+                twist += a;
+                max_seg = max_seg.max(a.abs());
+            }
+            prev = Some((c, q));
         }
-        prev = Some((c, q));
-    }
-    let (tip, _) = ring(p, around, along);
-    let cap = Vector3::from(p[(along + 1) * around + 1]);
-    TailShape {
-        length_ratio: length / self.length,
-        twist_deg: twist.to_degrees(),
-        max_segment_twist_deg: max_seg.to_degrees(),
-        tip_offset: (cap - tip).norm() / self.radius,
-    }
+        let (tip, _) = ring(p, around, along);
+        let cap = Vector3::from(p[(along + 1) * around + 1]);
+        TailShape {
+            length_ratio: length / self.length,
+            twist_deg: twist.to_degrees(),
+            max_segment_twist_deg: max_seg.to_degrees(),
+            tip_offset: (cap - tip).norm() / self.radius,
+        }
     }
 }
