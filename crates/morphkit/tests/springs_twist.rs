@@ -148,3 +148,29 @@ fn a_long_thin_tail_curled_past_200_degrees_keeps_one_way_round() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+#[test]
+fn the_ends_stay_exact_where_the_logs_change_branch() {
+    // Past 180° the curled end's logs are taken the long way round (θ − 2π).
+    for (tail, fixed) in [
+        (Tail::new(190.0, 90.0), FixedVertices::Auto),
+        (Tail::new(200.0, 90.0), FixedVertices::None),
+    ] {
+        let s = tail.shapes();
+        let d = morphkit::mesh::bbox_diagonal(s.positions(1));
+        let opts = BlendOptions {
+            fixed: fixed.clone(),
+            ..Default::default()
+        };
+        let mut b = PhysicalBlend::new(&s, &opts).unwrap();
+        for (a, shape) in [(0.0, 0), (1.0, 1)] {
+            let r = b.solve(&Weights::Alpha(a)).unwrap();
+            let err = common::max_dist(&r.positions, s.positions(shape));
+            assert!(err <= 1e-9 * d, "{fixed:?} α {a}: {err:e} (diagonal {d})");
+            assert_eq!(r.stats.newton_iterations, 0, "{fixed:?} α {a}");
+            let p = b.predict(&Weights::Alpha(a)).unwrap();
+            let err = common::max_dist(&p, s.positions(shape));
+            assert!(err <= 1e-9 * d, "{fixed:?} α {a}: predictor {err:e}");
+        }
+    }
+}
