@@ -1,6 +1,7 @@
 //! A generated tail that curls far (issue 40, "thin parts that turn far"): a closed tube whose
 //! first part (the attachment, standing in for the body) moves in no shape, and a target in
-//! which the rest curls over the attachment by 150–190° and rolls about its own axis.
+//! which the rest curls over the attachment (150–220° in `tests/springs_twist.rs`) and rolls
+//! about its own axis.
 
 use morphkit::mesh::{generate, Point, ShapeSet};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
@@ -25,7 +26,8 @@ pub struct Tail {
 }
 
 impl Tail {
-    /// A tube of 12 × 49 vertices, 6 long, radius 0.25, curled over its last 4.5.
+    /// A tube of 12 × 49 vertices, 6 long, radius 0.25, still over its first 1.5, curled over
+    /// the next 3 (the last 1.5 follows straight).
     pub fn new(bend_deg: f64, roll_deg: f64) -> Self {
         Self {
             around: 12,
@@ -38,16 +40,9 @@ impl Tail {
             roll_deg,
         }
     }
-}
 
-/// The straight tube and the tube curled by `bend_deg` over the body (about z), its curled
-/// part rolled about its own axis by up to `roll_deg` (growing linearly along the curl).
-pub fn curled_tail(bend_deg: f64, roll_deg: f64) -> ShapeSet {
-    Tail::new(bend_deg, roll_deg).shapes()
-}
-
-impl Tail {
-    /// The straight tube and the curled one.
+    /// The straight tube and the tube curled by `bend_deg` about z, its curled part rolled
+    /// about its own axis.
     pub fn shapes(&self) -> ShapeSet {
         let m = generate::tube(self.radius, self.length, self.around, self.along, true);
         let (attach, curl, roll_deg) = (self.attach, self.curl, self.roll_deg);
@@ -63,44 +58,7 @@ impl Tail {
         let curled = generate::bend(&rolled, attach, curl, self.bend_deg.to_radians());
         super::two_shapes(&m, "rest", ("curled", curled))
     }
-}
 
-/// Shape of a tail: its centre line's length over the rest length, its twist (the roll of
-/// each ring relative to the one before, about the ring's axis, summed along the tube), the
-/// largest twist between two consecutive rings, and how far the tip's cap vertex sits from
-/// its ring's centre (over the radius; 0 for a flat cap, the "spiking tuft" when large).
-#[derive(Clone, Copy, Debug)]
-pub struct TailShape {
-    pub length_ratio: f64,
-    pub twist_deg: f64,
-    pub max_segment_twist_deg: f64,
-    pub tip_offset: f64,
-}
-
-fn ring(p: &[Point], around: usize, j: usize) -> (Vector3<f64>, Vec<Vector3<f64>>) {
-    let pts: Vec<Vector3<f64>> = (0..around)
-        .map(|i| Vector3::from(p[j * around + i]))
-        .collect();
-    let c = pts.iter().sum::<Vector3<f64>>() / around as f64;
-    (c, pts.into_iter().map(|q| q - c).collect())
-}
-
-/// Each ring's rotation from its rest placement (Kabsch of the centred rings).
-fn ring_rotation(rest: &[Vector3<f64>], now: &[Vector3<f64>]) -> UnitQuaternion<f64> {
-    let h: Matrix3<f64> = rest.iter().zip(now).map(|(a, b)| b * a.transpose()).sum();
-    let svd = h.svd(true, true);
-    let (u, vt) = (svd.u.unwrap(), svd.v_t.unwrap());
-    let d = (u * vt).determinant().signum();
-    let r = u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * vt;
-    UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r))
-}
-
-/// Measures positions `p` of a [`curled_tail`] against its rest shape.
-pub fn tail_shape(shapes: &ShapeSet, p: &[Point]) -> TailShape {
-    Tail::new(0.0, 0.0).shape(shapes, p)
-}
-
-impl Tail {
     /// Measures positions `p` of [`Tail::shapes`] against the rest shape.
     pub fn shape(&self, shapes: &ShapeSet, p: &[Point]) -> TailShape {
         let (around, along) = (self.around, self.along);
@@ -122,13 +80,38 @@ impl Tail {
             }
             prev = Some((c, q));
         }
-        let (tip, _) = ring(p, around, along);
-        let cap = Vector3::from(p[(along + 1) * around + 1]);
         TailShape {
             length_ratio: length / self.length,
             twist_deg: twist.to_degrees(),
             max_segment_twist_deg: max_seg.to_degrees(),
-            tip_offset: (cap - tip).norm() / self.radius,
         }
     }
+}
+
+/// Shape of a tail: its centre line's length over the rest length, its twist (the roll of
+/// each ring relative to the one before, about the ring's axis, summed along the tube), the
+/// largest twist between two consecutive rings.
+#[derive(Clone, Copy, Debug)]
+pub struct TailShape {
+    pub length_ratio: f64,
+    pub twist_deg: f64,
+    pub max_segment_twist_deg: f64,
+}
+
+fn ring(p: &[Point], around: usize, j: usize) -> (Vector3<f64>, Vec<Vector3<f64>>) {
+    let pts: Vec<Vector3<f64>> = (0..around)
+        .map(|i| Vector3::from(p[j * around + i]))
+        .collect();
+    let c = pts.iter().sum::<Vector3<f64>>() / around as f64;
+    (c, pts.into_iter().map(|q| q - c).collect())
+}
+
+/// Each ring's rotation from its rest placement (Kabsch of the centred rings).
+fn ring_rotation(rest: &[Vector3<f64>], now: &[Vector3<f64>]) -> UnitQuaternion<f64> {
+    let h: Matrix3<f64> = rest.iter().zip(now).map(|(a, b)| b * a.transpose()).sum();
+    let svd = h.svd(true, true);
+    let (u, vt) = (svd.u.unwrap(), svd.v_t.unwrap());
+    let d = (u * vt).determinant().signum();
+    let r = u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * vt;
+    UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r))
 }
