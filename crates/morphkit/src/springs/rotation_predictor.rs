@@ -7,7 +7,8 @@
 //!
 //! $$\bar D_t = \exp\Big(\sum_s c_s \log R_{s,t}\Big)\, \Big(c_0 I + \sum_{s \ge 1} c_s S_{s,t}\Big),$$
 //!
-//! rotations blended in the log map, stretches linearly, and one prefactored Poisson solve ([`TransferSolver`], the same system as
+//! rotations blended in the log map (on one branch along the surface, below), stretches
+//! linearly, and one prefactored Poisson solve ([`TransferSolver`], the same system as
 //! deformation transfer) gives positions whose gradients best match $\bar D$. Each connected
 //! component is then placed rigidly: onto its fixed vertices where it has some, else onto the
 //! linear blend. At one-hot weights $\bar D$ is the shape's own gradient and the solve
