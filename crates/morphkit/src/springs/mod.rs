@@ -32,15 +32,16 @@
 //! > [`newton`](self) (fixed budgets, schedules and tolerances, no timing) started from the
 //! > start $\tilde P(w) = P(w) + \sum_{s \ge 1} q_s(c_s)$. The predictor $P(w)$ is the Poisson
 //! > interpolation of the shapes' deformation gradients with rotations blended in the log map
-//! > ([`Predictor::RotationAware`], Xu et al. 2005), placed rigidly on the fixed vertices or
-//! > the linear blend $\sum_s c_s x^s$ ([`Predictor::Linear`] uses that blend directly), then
-//! > each gauged component aligned rigidly to the linear blend. The *sampled correction*
-//! > $q_s$ ([`sampled_start`], [`BlendOptions::sampled_start`]) interpolates how far target
-//! > $s$'s own equilibria at $a = ¼, ½, ¾$ lie from $P$ (solved once per rig, ½ from $P$, ¼ and
-//! > ¾ from $P$ plus the ½ sample's correction); it is zero at $c_s \in \{0, 1\}$. The
-//! > energy includes a weak [`tether`] of every solved vertex to $P(w)$
-//! > ([`BlendOptions::tether`]), which lifts the soft modes where the blended lengths have two
-//! > equilibria, so that consecutive frames follow one branch instead of snapping.
+//! > ([`Predictor::RotationAware`], Xu et al. 2005; each shape's logs on one branch along the
+//! > surface, so a part that turns by about π keeps one way round), placed rigidly on the
+//! > fixed vertices or the linear blend $\sum_s c_s x^s$ ([`Predictor::Linear`] uses that
+//! > blend directly), then each gauged component aligned rigidly to the linear blend. The
+//! > *sampled correction* $q_s$ ([`sampled_start`], [`BlendOptions::sampled_start`])
+//! > interpolates how far target $s$'s own equilibria at $a = ¼, ½, ¾$ lie from $P$ (solved
+//! > once per rig, ½ from $P$, ¼ and ¾ from $P$ plus the ½ sample's correction); it is zero
+//! > at $c_s \in \{0, 1\}$. The energy includes a weak [`tether`] of every solved vertex to
+//! > $P(w)$ ([`BlendOptions::tether`]), which lifts the soft modes where the blended lengths
+//! > have two equilibria, so that consecutive frames follow one branch instead of snapping.
 //!
 //! Consequences, each tested:
 //! - **Endpoints are exact.** At one-hot weights $P = x^s$, where every term has zero energy and

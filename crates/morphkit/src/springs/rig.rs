@@ -190,7 +190,7 @@ impl Rig {
         }
         let system = FreeSystem::new(block_pattern.clone(), &constraints.fixed_dof)?;
         let rotation = match o.predictor {
-            Predictor::RotationAware => RotationPredictor::new(shapes, &components),
+            Predictor::RotationAware => RotationPredictor::new(shapes, &topology, &components),
             Predictor::Linear => None,
         };
         // Held at the linear blend (bands are held at the predictor, which places them).

@@ -7,7 +7,7 @@
 //!
 //! $$\bar D_t = \exp\Big(\sum_s c_s \log R_{s,t}\Big)\, \Big(c_0 I + \sum_{s \ge 1} c_s S_{s,t}\Big),$$
 //!
-//! rotations blended in the log map (axis–angle vectors, the branch with angle ≤ π), stretches
+//! rotations blended in the log map (on one branch along the surface, below), stretches
 //! linearly, and one prefactored Poisson solve ([`TransferSolver`], the same system as
 //! deformation transfer) gives positions whose gradients best match $\bar D$. Each connected
 //! component is then placed rigidly: onto its fixed vertices where it has some, else onto the
@@ -15,6 +15,21 @@
 //! reproduces the shape exactly (up to round-off), so endpoints stay exact; in between, a jaw
 //! or a leg that turns by θ is predicted turned by about αθ instead of cut short along the
 //! chord as by the linear blend.
+//!
+//! **The branch of each log.** A rotation by θ about $a$ is also one by $θ - 2π$ about $a$
+//! (and by $θ + 2πk$ for every $k$), and the blend depends on the choice: by ½ it turns by
+//! $θ/2$ one way or $π - θ/2$ the other. Taking each triangle's principal log (angle ≤ π) on
+//! its own splits a part that turns by about π, as a tail curled over the back does, where
+//! neighbouring triangles land on different sides of π: the blended gradients then disagree
+//! by up to π across an edge and the prediction is twisted (a curled tube at ½: up to 25
+//! triangles facing against both shapes and 130° of twist between two rings, where the
+//! linear blend has 0–2). So the logs of each shape are put on one branch along the surface
+//! ([`consistent_logs`]): flooded over triangle adjacency from the triangles that turn least
+//! (the fixed or still region), each triangle takes the $θ + 2πk$ nearest to the mean of its
+//! already assigned neighbours, the way phase unwrapping follows the most reliable pixels
+//! first. A part that turns by 190° is then predicted turned by 95° at ½, the same way round
+//! as the parts it hangs from. Every branch has the same exponential, so one-hot weights
+//! still give each shape's own gradients.
 //!
 //! Vertices that no triangle uses (the interior and anchor vertices of a volumetric blend,
 //! issue 11) have no gradient. The Poisson solve runs on the triangulated surface alone, and
@@ -28,14 +43,17 @@
 use super::constraints::Components;
 use super::interior::reverse::Neighbourhoods;
 use crate::geom::{kabsch, polar_decomposition};
-use crate::mesh::{sub, Point, ShapeSet, TriMesh};
+use crate::mesh::{sub, Point, ShapeSet, Topology, TriMesh};
 use crate::transfer::{GradientOperator, SolverOptions, TransferSolver};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 
 /// Prefactored Poisson interpolation of a shape set.
 pub(crate) struct RotationPredictor {
     solver: TransferSolver,
-    /// Per shape ≥ 1, per triangle: log-rotation vector and stretch.
+    /// Per shape ≥ 1, per triangle: log-rotation vector (on one branch along the surface,
+    /// [`consistent_logs`]) and stretch.
     logs: Vec<Vec<Vector3<f64>>>,
     stretches: Vec<Vec<Matrix3<f64>>>,
     members: Vec<Vec<u32>>,
@@ -60,7 +78,8 @@ impl RotationPredictor {
     /// Gradients, polar factors and the factorization of the triangulated vertices, and the
     /// neighbourhoods of the others (module doc); `None` when the base surface cannot carry a
     /// Poisson solve (no triangles, say), and the linear blend is used instead.
-    pub fn new(shapes: &ShapeSet, components: &Components) -> Option<Self> {
+    /// `topology` is that of `shapes`' triangles.
+    pub fn new(shapes: &ShapeSet, topology: &Topology, components: &Components) -> Option<Self> {
         let n = shapes.num_vertices();
         let mut used = vec![false; n];
         shapes
@@ -97,6 +116,7 @@ impl RotationPredictor {
                 l.push(q.scaled_axis());
                 st.push(sm);
             }
+            consistent_logs(&mut l, |t| topology.face_neighbors(t));
             logs.push(l);
             stretches.push(st);
         }
@@ -191,5 +211,135 @@ impl RotationPredictor {
             }
         }
         p.iter().flatten().all(|v| v.is_finite()).then_some(p)
+    }
+}
+
+/// Puts the per-triangle rotation logs `logs` (principal: angle ≤ π) on one branch along the
+/// surface (module doc): in each connected part (over `neighbours`, the triangles sharing an
+/// edge), starting from the triangle that turns least, triangles are taken in the order of
+/// their own angle among those next to an assigned one, and each becomes the
+/// $(θ + 2πk)\,a$ nearest to the mean of its assigned neighbours. Deterministic: ties go to
+/// the lower index. The exponential of every log is unchanged.
+pub(crate) fn consistent_logs<'a>(
+    logs: &mut [Vector3<f64>],
+    neighbours: impl Fn(usize) -> &'a [u32],
+) {
+    use std::f64::consts::TAU;
+    let n = logs.len();
+    // Angles are ≥ 0, so their bit patterns sort like the angles.
+    let key = |t: usize, logs: &[Vector3<f64>]| Reverse((logs[t].norm().to_bits(), t as u32));
+    let mut seeds: Vec<(u64, u32)> = (0..n).map(|t| key(t, logs).0).collect();
+    seeds.sort_unstable();
+    let mut assigned = vec![false; n];
+    let mut heap = BinaryHeap::new();
+    for (_, seed) in seeds {
+        if assigned[seed as usize] {
+            continue;
+        }
+        // The seed keeps its principal log.
+        heap.push(Reverse((0, seed)));
+        while let Some(Reverse((_, t))) = heap.pop() {
+            let t = t as usize;
+            if assigned[t] {
+                continue;
+            }
+            let (mut mean, mut count) = (Vector3::zeros(), 0usize);
+            for &m in neighbours(t) {
+                if assigned[m as usize] {
+                    mean += logs[m as usize];
+                    count += 1;
+                }
+            }
+            if count > 0 {
+                mean /= count as f64;
+                let w = logs[t];
+                let angle = w.norm();
+                // Near the identity the axis is the neighbours' (a whole turn about any axis
+                // is the identity too).
+                let axis = if angle > 1e-9 {
+                    w / angle
+                } else if mean.norm() > 0.0 {
+                    mean.normalize()
+                } else {
+                    Vector3::zeros()
+                };
+                // argmin over k of |(θ + 2πk) a − mean|: θ + 2πk nearest to a · mean.
+                let k = ((axis.dot(&mean) - angle) / TAU).round();
+                if k != 0.0 {
+                    logs[t] = axis * (angle + TAU * k);
+                }
+            }
+            assigned[t] = true;
+            for &m in neighbours(t) {
+                if !assigned[m as usize] {
+                    heap.push(key(m as usize, logs));
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    /// A strip of triangles in a row, triangle t turning by `turn(t)` about z.
+    fn strip(turns: &[f64]) -> (Vec<Vector3<f64>>, Vec<Vec<u32>>) {
+        let n = turns.len();
+        let logs = turns
+            .iter()
+            .map(|&a| {
+                let q = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), a);
+                q.scaled_axis()
+            })
+            .collect();
+        let adj = (0..n)
+            .map(|t| {
+                let mut v = Vec::new();
+                if t > 0 {
+                    v.push(t as u32 - 1);
+                }
+                if t + 1 < n {
+                    v.push(t as u32 + 1);
+                }
+                v
+            })
+            .collect();
+        (logs, adj)
+    }
+
+    #[test]
+    fn a_strip_turning_past_pi_keeps_one_way_round() {
+        // 0° … 380° in steps of 20°: past π the principal logs flip to the other way round.
+        let turns: Vec<f64> = (0..20).map(|k| (20.0 * k as f64).to_radians()).collect();
+        let (mut logs, adj) = strip(&turns);
+        assert!(logs[10].z < 0.0, "principal log of 200° is −160°");
+        consistent_logs(&mut logs, |t| &adj[t]);
+        for (t, (w, &a)) in logs.iter().zip(&turns).enumerate() {
+            assert!(
+                (w - Vector3::new(0.0, 0.0, a)).norm() < 1e-9,
+                "{t}: {w:?} for {a}"
+            );
+        }
+    }
+
+    #[test]
+    fn branches_keep_the_rotation_and_do_not_depend_on_the_start_order() {
+        // Exactly π at the middle triangle, whose principal axis sign is round-off.
+        let turns = [0.0, 0.5 * PI, PI, 0.5 * PI, 0.0];
+        let (mut logs, adj) = strip(&turns);
+        let before = logs.clone();
+        consistent_logs(&mut logs, |t| &adj[t]);
+        for (w, b) in logs.iter().zip(&before) {
+            let (rw, rb) = (
+                UnitQuaternion::from_scaled_axis(*w).to_rotation_matrix(),
+                UnitQuaternion::from_scaled_axis(*b).to_rotation_matrix(),
+            );
+            assert!((rw.matrix() - rb.matrix()).norm() < 1e-12);
+        }
+        let mut again = before.clone();
+        consistent_logs(&mut again, |t| &adj[t]);
+        assert_eq!(logs, again);
     }
 }

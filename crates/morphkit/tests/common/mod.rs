@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod sequence;
+pub mod tail;
 
 use std::path::PathBuf;
 
