@@ -63,7 +63,11 @@ fn unused_targets_change_no_frame_and_a_weight_leaves_zero_continuously() {
         let r1 = all.solve(&Weights::Delta(vec![alpha, 0.0, 0.0])).unwrap();
         assert!(r0.stats.converged && r1.stats.converged);
         let gap = max_dist(&r0.positions, &r1.positions);
-        assert!(gap <= 1e-9 * d, "A at {alpha}: {:e} of the diagonal apart", gap / d);
+        assert!(
+            gap <= 1e-9 * d,
+            "A at {alpha}: {:e} of the diagonal apart",
+            gap / d
+        );
         for (k, name) in [(1, "B"), (2, "C")] {
             let mut w = vec![alpha, 0.0, 0.0];
             w[k] = 1e-6;
@@ -79,7 +83,10 @@ fn unused_targets_change_no_frame_and_a_weight_leaves_zero_continuously() {
             w[k] = 0.2;
             let r = all.solve(&Weights::Delta(w)).unwrap();
             assert!(r.stats.converged, "{name} at 0.2");
-            assert!(max_dist(&r.positions, &r1.positions) > 2e-3 * d, "{name} at 0.2");
+            assert!(
+                max_dist(&r.positions, &r1.positions) > 2e-3 * d,
+                "{name} at 0.2"
+            );
         }
     }
 }
@@ -104,7 +111,14 @@ fn frames_through_the_ramp_move_in_small_steps() {
         let steps: Vec<f64> = frames.windows(2).map(|f| max_dist(&f[0], &f[1])).collect();
         let total = max_dist(&frames[0], &frames[40]);
         let worst = steps.iter().cloned().fold(0.0, f64::max);
-        eprintln!("target {k}: total {:e}, worst step {:e} (of the diagonal)", total / d, worst / d);
-        assert!(worst <= 0.2 * total.max(1e-9 * d), "target {k}: a step of {worst:e} in {total:e}");
+        eprintln!(
+            "target {k}: total {:e}, worst step {:e} (of the diagonal)",
+            total / d,
+            worst / d
+        );
+        assert!(
+            worst <= 0.2 * total.max(1e-9 * d),
+            "target {k}: a step of {worst:e} in {total:e}"
+        );
     }
 }

@@ -152,8 +152,7 @@ impl Rig {
         kinematic.sort_unstable();
         kinematic.dedup();
         let bands = thin_bands(&topology, &components, o.thin_band_rings);
-        let mut constraints =
-            Constraints::new(shapes, &components, &o.fixed, &kinematic, &bands)?;
+        let mut constraints = Constraints::new(shapes, &components, &o.fixed, &kinematic, &bands)?;
         summary.fixed_vertices =
             constraints.fixed.len() - constraints.kinematic.len() - constraints.bands.len();
         summary.kinematic_vertices = constraints.kinematic.len();
