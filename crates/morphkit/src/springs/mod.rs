@@ -53,9 +53,13 @@
 //!   order, scrubbing back and forth, threads ([`PhysicalBlend::solve_many`]) and machine load
 //!   do not change a bit of the result (buffers are 64-byte aligned, METIS orderings are
 //!   computed one at a time; the tests compare frames for equality). `--alpha a` equals the matching frame of `--frames`.
+//! - **A frame depends only on its nonzero weights.** Adding a target at weight 0 changes no
+//!   frame: which vertices are held (automatic fixed and kinematic ones), which hinges act and
+//!   where thin bands are anchored are decided per frame from the weights, fading over
+//!   [`BlendOptions::hold_ramp`] so that frames stay continuous as a weight leaves 0 (`holds`).
 //! - **Kinematic sheets.** Triangles stretched more than [`BlendOptions::kinematic_stretch`]
-//!   (default 10×) between the base and a target are no material: their vertices follow the
-//!   linear blend as boundary conditions, chosen once per rig.
+//!   (default 10×) between the base and a target are no material: while that target is
+//!   active their vertices follow the linear blend as boundary conditions.
 //! - **Thin bands.** Connected components every vertex of which lies within
 //!   [`BlendOptions::thin_band_rings`] (default 4) edges of the boundary, and at least twice
 //!   as long as wide ([`thin_bands`]: eye strips, tear films, eyelash and hair cards), have no
