@@ -69,13 +69,16 @@ mod inversion;
 pub mod lattice;
 mod options;
 pub mod reverse;
+pub mod shell;
 pub mod tetgen;
 mod volumetric;
 
 pub use anchor::{Anchor, AnchorMotion};
 pub use inversion::{count_inversions, Inversions};
 pub use lattice::{Interior, SkippedComponent};
-pub use options::{AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions};
+pub use options::{
+    AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions, VOLUME_STIFFNESS_DEFAULT,
+};
 pub use volumetric::{InteriorReport, SurfacePredictor, VolumeResult, VolumetricBlend};
 
 use super::BlendError;
