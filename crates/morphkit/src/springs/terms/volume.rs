@@ -72,8 +72,12 @@ impl VolumeTerm {
             .collect();
         let diag = crate::mesh::bbox_diagonal(shapes.positions(0)).max(f64::MIN_POSITIVE);
         let eps = 1e-12 * diag * diag * diag;
+        // Left out: tetrahedra flat in every shape, and those turned over in some shape
+        // against the base (a reverse-solved interior can hold such; interpolating a signed
+        // volume through zero would turn them over in the blend too).
         let keep: Vec<usize> = (0..tets.len())
             .filter(|&t| all.iter().any(|v| v[t].abs() > eps))
+            .filter(|&t| all.iter().all(|v| v[t] * all[0][t] >= 0.0))
             .collect();
         // Positive in the base.
         let sign: Vec<f64> = keep
