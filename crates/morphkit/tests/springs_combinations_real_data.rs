@@ -6,7 +6,7 @@
 //! The ICT rig's combinations of three expressions pass since a frame depends only on its
 //! nonzero weights (`springs::holds`): before, jawOpen's mouth interior was held at the linear
 //! blend in every frame, and 2 of these 12 folded a triangle more than the linear blend at the
-//! left mouth corner (docs/choices.md, issue 40).
+//! left mouth corner (docs/fidelity.md, issue 40).
 
 mod common;
 

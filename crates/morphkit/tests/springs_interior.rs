@@ -492,9 +492,9 @@ fn tetgen_interior_is_deterministic_and_follows_the_density() {
 }
 
 /// The rotation-aware predictor carries the interior (vertices without triangles) with its
-/// surface neighbourhood: a 150° bend at α = ½ starts next to its equilibrium (4 Newton
-/// iterations; 3 with Ma's surface bending springs), where the linear interior of before
-/// needed 6 (as the linear predictor still does).
+/// surface neighbourhood: a 150° bend at α = ½ starts next to its equilibrium (5 Newton
+/// iterations, 4 before the volume term of issue 40; 3 with Ma's surface bending springs),
+/// where the linear interior of before needs 12 (6 before the volume term).
 #[test]
 fn the_predictor_carries_the_interior_along_the_bend() {
     let s = bent_bar(150.0);
@@ -516,7 +516,7 @@ fn the_predictor_carries_the_interior_along_the_bend() {
     let (linear, y) = run(Predictor::Linear);
     eprintln!("Newton iterations at α = ½: rotation-aware {rotation}, linear {linear}");
     assert!(
-        rotation <= 4 && linear >= rotation + 2,
+        rotation <= 5 && linear >= rotation + 2,
         "{rotation} vs {linear}"
     );
     // Both reach the same equilibrium.

@@ -4,7 +4,7 @@
 //! facing against both shapes than the linear blend, the solve converges, the tail keeps its
 //! length within 0.5%, and its twist is within 10° (the long tail: 20°) of α × the roll.
 //!
-//! Each row is printed (`--nocapture`) for docs/choices.md. Before the rotation logs were put
+//! Each row is printed (`--nocapture`) for docs/fidelity.md. Before the rotation logs were put
 //! on one branch along the surface (springs::rotation_predictor), every test here failed: the
 //! predictor flipped 14 and 25 triangles against both shapes at 180° with a roll of 45° and
 //! 90° (linear blend 0 and 2); the free tail at 190° and 200° with a roll of 90° came out

@@ -210,7 +210,9 @@ pub struct BlendArgs {
     pub anchor: Option<String>,
     /// Interior for volume (Sec. 3.1): `none`, `lattice` (BCC lattice, spacing 2 mean edges /
     /// density) or `tetgen` (constrained Delaunay tetrahedralization by an external `tetgen`
-    /// on the PATH, tetrahedra up to a regular one of that edge), optionally `,density`.
+    /// on the PATH, tetrahedra up to a regular one of that edge), optionally `,density` and
+    /// `,volume`: the stiffness of the volume term on the interior's tetrahedra and shell
+    /// (default 10; 0 turns it off, springs only as in Ma et al.).
     #[arg(long, default_value = "none")]
     pub interior: String,
 }

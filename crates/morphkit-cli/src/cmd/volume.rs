@@ -2,14 +2,15 @@
 //! volume and the rigid anchor (Ma et al. 2012, Sec. 3.1 and 3.4), through
 //! [`VolumetricBlend`]. The flags are parsed here; `blend.rs` only hands over.
 //!
-//! - `--interior none|lattice|tetgen[,density]`: `lattice` fills each closed component with a
+//! - `--interior none|lattice|tetgen[,density[,volume]]`: `lattice` fills each closed component with a
 //!   BCC lattice (density 1: spacing two mean edges; 2: half that), small holes capped for
 //!   the inside test; components with larger openings are blended with surface springs alone
 //!   and listed in the report and on stderr. `tetgen` runs
 //!   an external `tetgen` (Debian package; AGPL, only run as a separate process) on each closed
 //!   component's surface for a constrained Delaunay tetrahedralization (largest tetrahedron a
 //!   regular one of edge 2 mean edges / density; the surface is not split); without `tetgen`
-//!   on the PATH it is a clear error.
+//!   on the PATH it is a clear error. `volume` (default 10, 0: off) is the stiffness of the
+//!   volume term on the interior's tetrahedra and the lattice's shell (issue 40).
 //! - `--anchor auto|x,y,z[,size]`: a small stiff cube inside the base whose vertices are the
 //!   boundary conditions; the result follows its slerp-interpolated rigid motion.
 
@@ -26,7 +27,7 @@ use morphkit::springs::{
 use serde_json::json;
 use std::time::Instant;
 
-/// Parses `--interior none|lattice|tetgen[,density]`.
+/// Parses `--interior none|lattice|tetgen[,density[,volume]]`.
 pub fn parse_interior(spec: &str) -> anyhow::Result<InteriorOptions> {
     InteriorOptions::parse(spec).map_err(|e| anyhow::anyhow!("--interior: {e}"))
 }
@@ -184,7 +185,10 @@ mod tests {
         assert_eq!(parse_interior("tetgen").unwrap().mode, InteriorMode::Tetgen);
         assert!(parse_interior("voxels").is_err());
         assert!(parse_interior("lattice,-1").is_err());
-        assert!(parse_interior("lattice,1,2").is_err());
+        assert_eq!(parse_interior("lattice,1,2").unwrap().volume, 2.0);
+        assert_eq!(parse_interior("lattice,1,0").unwrap().volume, 0.0);
+        assert!(parse_interior("lattice,1,-2").is_err());
+        assert!(parse_interior("lattice,1,2,3").is_err());
         assert_eq!(
             parse_anchor(Some("auto")).unwrap().placement,
             AnchorPlacement::Auto

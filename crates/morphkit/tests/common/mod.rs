@@ -49,7 +49,7 @@ pub const ICT_EXPRESSIONS: [&str; 10] = [
 /// mouth corner, where jawLeft itself presses the lips into dihedral angles of ±150°), 0 for
 /// every other. jawLeft folds it in a rig of the neutral and jawLeft alone too; the full rig
 /// used to hide it by holding jawOpen's mouth interior in every frame, until frames came to
-/// depend only on their own weights (issue 40, docs/choices.md).
+/// depend only on their own weights (issue 40, docs/fidelity.md).
 pub fn ict_known_fold_excess(expression: &str) -> usize {
     usize::from(expression == "jawLeft")
 }

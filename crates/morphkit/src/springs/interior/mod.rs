@@ -16,6 +16,13 @@
 //!   [`InteriorMode::Tetgen`](super::InteriorMode), the edges of a constrained Delaunay
 //!   tetrahedralization made by an external `tetgen` process, surface kept as it is
 //!   ([`tetgen`]);
+//! - a **volume term** ([`VolumeTerm`](super::terms::VolumeTerm), stiffness
+//!   [`InteriorOptions::volume`], default 10, 0 turns it off) on the interior's tetrahedra and,
+//!   with the lattice, on the shell between the surface and the lattice ([`shell`]: a cone from
+//!   each surface triangle to a tied lattice point, wedges and fans between cones), each held
+//!   near its linearly interpolated volume. Interpolated rest lengths of springs oblique to a
+//!   large shear are too long, interior and surface alike, so springs alone inflate a twisted
+//!   shape (issue 40; docs/fidelity.md, "Volume under twist");
 //! - **anchor springs** ([`SpringKind::Anchor`](super::SpringKind)): the anchor's own edges,
 //!   [`AnchorOptions::stiffness`] × $k_0$, and ties from each anchor vertex to the nearest body
 //!   vertices at $k_0$ ([`anchor`]).
@@ -69,13 +76,16 @@ mod inversion;
 pub mod lattice;
 mod options;
 pub mod reverse;
+pub mod shell;
 pub mod tetgen;
 mod volumetric;
 
 pub use anchor::{Anchor, AnchorMotion};
 pub use inversion::{count_inversions, Inversions};
 pub use lattice::{Interior, SkippedComponent};
-pub use options::{AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions};
+pub use options::{
+    AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions, VOLUME_STIFFNESS_DEFAULT,
+};
 pub use volumetric::{InteriorReport, SurfacePredictor, VolumeResult, VolumetricBlend};
 
 use super::BlendError;

@@ -40,7 +40,16 @@ pub struct InteriorOptions {
     /// Stiffness multiplier of internal springs relative to $k_0$. Default `1.0` (the paper
     /// uses one $k_0$ for every spring).
     pub stiffness: f64,
+    /// Stiffness $\kappa$ of the volume term on the interior's tetrahedra (the lattice's, plus
+    /// one cone per surface triangle to a tied interior point; or tetgen's), relative to
+    /// $k_0$ ([`VolumeTerm`](crate::springs::terms::VolumeTerm)); `0` turns it off. Internal
+    /// springs alone do not hold the volume under a large shear (docs/fidelity.md, "Volume under
+    /// twist"). Default [`VOLUME_STIFFNESS_DEFAULT`] (10).
+    pub volume: f64,
 }
+
+/// The default [`InteriorOptions::volume`].
+pub const VOLUME_STIFFNESS_DEFAULT: f64 = 10.0;
 
 impl Default for InteriorOptions {
     fn default() -> Self {
@@ -51,6 +60,7 @@ impl Default for InteriorOptions {
             ties_per_vertex: 4,
             tie_radius: 2.0,
             stiffness: 1.0,
+            volume: VOLUME_STIFFNESS_DEFAULT,
         }
     }
 }
@@ -101,8 +111,9 @@ impl Default for AnchorOptions {
 }
 
 impl InteriorOptions {
-    /// Parses `none|lattice|tetgen[,density]` (the `--interior` flag and the scene file's
-    /// `blend.interior`); other fields keep their defaults. The error says what is wrong.
+    /// Parses `none|lattice|tetgen[,density[,volume]]` (the `--interior` flag and the scene
+    /// file's `blend.interior`; `volume` is [`Self::volume`], 0 turns the volume term off);
+    /// other fields keep their defaults. The error says what is wrong.
     pub fn parse(spec: &str) -> Result<Self, String> {
         let mut parts = spec.split(',');
         let mode = match parts.next().unwrap_or("").trim() {
@@ -128,8 +139,19 @@ impl InteriorOptions {
                 return Err(format!("the density must be positive, got {d}"));
             }
         }
+        if let Some(v) = parts.next() {
+            o.volume = v
+                .trim()
+                .parse()
+                .map_err(|_| format!("volume stiffness '{v}' is not a number"))?;
+            if !(o.volume.is_finite() && o.volume >= 0.0) {
+                return Err(format!(
+                    "the volume stiffness must be 0 or positive, got {v}"
+                ));
+            }
+        }
         if parts.next().is_some() {
-            return Err(format!("takes KIND[,density], got '{spec}'"));
+            return Err(format!("takes KIND[,density[,volume]], got '{spec}'"));
         }
         Ok(o)
     }
@@ -151,6 +173,12 @@ impl InteriorOptions {
         }
         if !(self.stiffness.is_finite() && self.stiffness > 0.0) {
             return bad("the internal stiffness", self.stiffness);
+        }
+        if !(self.volume.is_finite() && self.volume >= 0.0) {
+            return Err(super::InteriorError::InvalidOption(format!(
+                "the volume stiffness must be finite and not negative, got {}",
+                self.volume
+            )));
         }
         Ok(())
     }

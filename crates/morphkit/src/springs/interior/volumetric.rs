@@ -10,7 +10,7 @@ use super::{
 };
 use crate::geom::RigidTransform;
 use crate::mesh::{Point, ShapeSet, TriMesh};
-use crate::springs::terms::{EnergyTerm, SpringTerm};
+use crate::springs::terms::{EnergyTerm, SpringTerm, VolumeTerm};
 use crate::springs::{
     BlendError, BlendOptions, BlendPredictor, FixedVertices, FrameStats, PhysicalBlend, Spring,
     SpringKind, SpringSet, Weights,
@@ -33,6 +33,9 @@ pub struct InteriorReport {
     pub anchor_springs: usize,
     /// Interior tetrahedra (lattice or tetgen).
     pub tetrahedra: usize,
+    /// Tetrahedra of the volume term: the interior's, plus the lattice's shell cones (one per
+    /// surface triangle that has one); 0 when the term is off.
+    pub volume_elements: usize,
     /// Lattice spacing, or tetgen's edge length $L$ of the volume bound, per filled component
     /// `(component, h)`.
     pub spacing: Vec<(usize, f64)>,
@@ -243,6 +246,24 @@ impl VolumetricBlend {
             let set = SpringSet::from_pairs(&local, &springs, &o.springs);
             terms.push(Box::new(SpringTerm::new(set, o.min_rest_fraction)));
         }
+        let mut volume_elements = 0;
+        if interior.volume > 0.0 {
+            let mut elements = inner.tets.clone();
+            if interior.mode == InteriorMode::Lattice {
+                elements.extend(super::shell::cones(
+                    base,
+                    shapes.triangles(),
+                    &inner.points,
+                    &inner.springs,
+                ));
+            }
+            if !elements.is_empty() {
+                let term =
+                    VolumeTerm::new(&local, &elements, interior.volume * k0, o.min_rest_fraction);
+                volume_elements = term.tetrahedra().len();
+                terms.push(Box::new(term));
+            }
+        }
         let blend = PhysicalBlend::with_terms(&local, &o, terms)?;
         let anchor_springs = springs
             .iter()
@@ -255,6 +276,7 @@ impl VolumetricBlend {
             internal_springs: springs.len() - anchor_springs,
             anchor_springs,
             tetrahedra: inner.tets.len(),
+            volume_elements,
             spacing: inner.spacing.clone(),
             skipped: inner.skipped.clone(),
             anchor: placed.as_ref().map(|a| (a.center, a.size)),

@@ -16,11 +16,13 @@
 mod hinge;
 mod points;
 mod spring;
+mod volume;
 
 pub use hinge::{HingeOptions, HingeTerm};
 pub use points::PointTarget;
 pub(crate) use points::{Held, PointTerm};
 pub use spring::SpringTerm;
+pub use volume::VolumeTerm;
 
 /// A 3×3 block, row-major.
 pub type Block = [[f64; 3]; 3];
