@@ -151,7 +151,13 @@ impl FrameHolds {
     /// blend `lin`, sorted by vertex: hard targets where held exactly, soft ones while fading.
     /// (The hard targets on band vertices only anchor the predictor: the solve holds bands
     /// already.)
+    ///
+    /// At a shape itself (one-hot weights) there are none: the equilibrium is that shape with
+    /// or without them, and a reference factor made there must not have them masked out.
     pub(super) fn targets(&self, c: &[f64], lin: &[Point]) -> Vec<PointTarget> {
+        if c.iter().filter(|&&w| w != 0.0).count() == 1 && c.contains(&1.0) {
+            return Vec::new();
+        }
         let r = self.ramp;
         let mut kappa: Vec<(u32, f64)> = Vec::new();
         for (v, m) in self.moved.largest(c) {

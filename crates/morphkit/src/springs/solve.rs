@@ -39,15 +39,8 @@ impl Rig {
         let start = Instant::now();
         self.check_targets(targets)?;
         let lin = predictor::linear(&self.shapes, c);
-        // The frame's own holds first, so that a user's target on the same vertex wins. At a
-        // shape itself (one-hot weights) the equilibrium is that shape with or without them,
-        // and a reference factor made there must not have them masked out.
-        let one_hot = c.iter().filter(|&&w| w != 0.0).count() == 1 && c.contains(&1.0);
-        let mut all_targets = if one_hot {
-            Vec::new()
-        } else {
-            self.holds.targets(c, &lin)
-        };
+        // The frame's own holds first, so that a user's target on the same vertex wins.
+        let mut all_targets = self.holds.targets(c, &lin);
         let holds = all_targets.len();
         all_targets.extend_from_slice(targets);
         let targets = &all_targets[..];
