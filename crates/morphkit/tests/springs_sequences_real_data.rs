@@ -13,7 +13,7 @@
 
 mod common;
 
-use common::sequence::{check_sequence, check_sequence_allowing, SequenceReport};
+use common::sequence::{check_sequence, SequenceReport};
 use morphkit::io::read_shape_set;
 use morphkit::springs::{BlendOptions, PhysicalBlend};
 
@@ -64,9 +64,7 @@ fn ict_expression_sequences() {
     assert_eq!(solver.summary().band_vertices, 2 * 152 + 2 * 204 + 12 * 114);
     let ict = common::ICT_EXPRESSIONS;
     for (k, e) in ict.iter().enumerate() {
-        let allowed = common::ict_known_fold_excess(e);
-        let rep = check_sequence_allowing(e, &mut solver, ict.len(), k, 36, allowed);
-        assert_holds(e, &rep);
+        assert_holds(e, &check_sequence(e, &mut solver, ict.len(), k, 36));
     }
 }
 
