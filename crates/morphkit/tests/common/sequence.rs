@@ -52,6 +52,19 @@ pub fn check_sequence(
     target: usize,
     steps: usize,
 ) -> SequenceReport {
+    check_sequence_allowing(name, solver, targets, target, steps, 0)
+}
+
+/// [`check_sequence`], with frames allowed `fold_excess` more folded triangles than the
+/// linear blend (a known, documented case; every other property as strict).
+pub fn check_sequence_allowing(
+    name: &str,
+    solver: &mut PhysicalBlend,
+    targets: usize,
+    target: usize,
+    steps: usize,
+    fold_excess: usize,
+) -> SequenceReport {
     let s = solver.shapes().clone();
     let topo = Topology::new(s.num_vertices(), s.triangles());
     let weights = ramp(targets, target, steps);
@@ -74,7 +87,7 @@ pub fn check_sequence(
             .worst_fold_excess
             .max(q.folds as i64 - q.folds_linear as i64);
         let finite = r.positions.iter().flatten().all(|c| c.is_finite());
-        if !r.stats.converged || !finite || q.folds > q.folds_linear || far > 0.5 {
+        if !r.stats.converged || !finite || q.folds > q.folds_linear + fold_excess || far > 0.5 {
             rep.failures.push(format!(
                 "{name} frame {k}: converged {} ({} Newton), finite {finite}, folds {} vs {} linear, from linear {far:.3} of the largest move",
                 r.stats.converged, r.stats.newton_iterations, q.folds, q.folds_linear
