@@ -35,9 +35,8 @@ fn check_endpoints(name: &str, solver: &mut PhysicalBlend) {
     }
 }
 
-/// Convergence, no flying parts and no more folds than linear at the given delta weights
-/// (up to `allowed` more: a known, documented case).
-fn check_quality(name: &str, solver: &mut PhysicalBlend, weights: &[Weights], allowed: usize) {
+/// Convergence, no flying parts and no more folds than linear at the given delta weights.
+fn check_quality(name: &str, solver: &mut PhysicalBlend, weights: &[Weights]) {
     let s = solver.shapes().clone();
     let topo = Topology::new(s.num_vertices(), s.triangles());
     for (w, r) in weights.iter().zip(solver.solve_many(weights, 2)) {
@@ -56,7 +55,7 @@ fn check_quality(name: &str, solver: &mut PhysicalBlend, weights: &[Weights], al
             q.max_from_linear <= 0.5 * q.largest_move,
             "{name} {w:?}: a part flies away: {q:?}"
         );
-        assert!(q.folds <= q.folds_linear + allowed, "{name} {w:?}: {q:?}");
+        assert!(q.folds <= q.folds_linear, "{name} {w:?}: {q:?}");
     }
 }
 
@@ -92,7 +91,7 @@ fn horse_poses_endpoints_and_quality() {
         let mut solver = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap();
         let name = format!("horse-{pose:02}");
         check_endpoints(&name, &mut solver);
-        check_quality(&name, &mut solver, &quarter_weights(1, 0), 0);
+        check_quality(&name, &mut solver, &quarter_weights(1, 0));
     }
 }
 
@@ -116,8 +115,7 @@ fn ict_expressions_quality() {
     };
     let mut solver = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap();
     for (k, e) in ICT.iter().enumerate() {
-        let allowed = common::ict_known_fold_excess(e);
-        check_quality(e, &mut solver, &quarter_weights(ICT.len(), k), allowed);
+        check_quality(e, &mut solver, &quarter_weights(ICT.len(), k));
     }
 }
 

@@ -64,7 +64,12 @@ fn ict_expression_sequences() {
     assert_eq!(solver.summary().band_vertices, 2 * 152 + 2 * 204 + 12 * 114);
     let ict = common::ICT_EXPRESSIONS;
     for (k, e) in ict.iter().enumerate() {
-        let allowed = common::ict_known_fold_excess(e);
+        // mouthPucker at α = 10/35 and 11/35 folds one small triangle at each mouth corner,
+        // as it does in a rig of the neutral and mouthPucker alone: the predictor turns them
+        // far from the linear blend there, so the fold guard has no trusted orientation. The
+        // full rig used to hide it by holding jawOpen's mouth interior in every frame, until
+        // frames came to depend only on their own weights (issue 40, docs/fidelity.md).
+        let allowed = if *e == "mouthPucker" { 2 } else { 0 };
         let rep = check_sequence_allowing(e, &mut solver, ict.len(), k, 36, allowed);
         assert_holds(e, &rep);
     }

@@ -43,6 +43,12 @@ pub struct BlendOptions {
     /// target that over-stretches it reaches it, and free at weight 0. So a frame depends only
     /// on its nonzero weights, and stays continuous as a weight leaves 0. Default `0.05`.
     pub hold_ramp: f64,
+    /// Stiffness of the *fold guard*, in the hinges' unit (mean structure stiffness times mean
+    /// squared rest length): a one-sided penalty on triangles turned more than about 84° from
+    /// their place in the predictor $P(w)$, where that place agrees with the linear blend
+    /// (`terms::orientation`). Zero wherever no triangle turns over, so it changes no other
+    /// equilibrium. `0` turns it off. Default `1`.
+    pub fold_guard: f64,
     /// Components every vertex of which lies within this many mesh edges of the boundary, and
     /// at least twice as long as wide, are *thin bands* ([`thin_bands`](super::thin_bands)):
     /// strips and cards such as a face rig's eye-occlusion strips, tear films and eyelashes.
@@ -157,6 +163,9 @@ pub(crate) fn check_options(o: &BlendOptions) -> Result<(), BlendError> {
     if !(o.min_rest_fraction > 0.0 && o.min_rest_fraction < 1.0) {
         return bad("min_rest_fraction", "in (0, 1)", o.min_rest_fraction);
     }
+    if !(o.fold_guard.is_finite() && o.fold_guard >= 0.0) {
+        return bad("the fold guard", "finite and non-negative", o.fold_guard);
+    }
     if !(o.hold_ramp.is_finite() && o.hold_ramp > 0.0 && o.hold_ramp <= 1.0) {
         return bad("the hold ramp", "in (0, 1]", o.hold_ramp);
     }
@@ -264,6 +273,7 @@ impl Default for BlendOptions {
             min_rest_fraction: 0.05,
             kinematic_stretch: 10.0,
             hold_ramp: 0.05,
+            fold_guard: 1.0,
             thin_band_rings: 4,
             tether: 1e-5,
             armijo: 1e-4,

@@ -33,6 +33,8 @@ pub(super) struct Rig {
     pub(super) tolerance: f64,
     /// Mean structure-spring stiffness on the base (the unit of point-target stiffness).
     pub(super) mean_stiffness: f64,
+    /// The fold guard's absolute stiffness (0: off).
+    pub(super) guard_weight: f64,
     /// The rotation-aware predictor, when asked for and possible.
     pub(super) rotation: Option<RotationPredictor>,
     /// Per vertex: held at the linear blend by a boundary condition (not the bands).
@@ -245,6 +247,11 @@ impl Rig {
                 options: o.clone(),
                 tolerance,
                 mean_stiffness,
+                guard_weight: if o.springs.structure {
+                    o.fold_guard * mean_stiffness * mean_square_length
+                } else {
+                    0.0
+                },
                 rotation,
                 is_fixed,
                 holds,

@@ -10,7 +10,7 @@ use super::predictor;
 use super::reference::{Factor, Reference, References, GRID, PROBE};
 use super::rig::Rig;
 use super::sampled_start::{half_weight, shifted, SampleSolver, SAMPLES};
-use super::terms::{EnergyTerm, Held, PointTarget, PointTerm, TermParameters};
+use super::terms::{EnergyTerm, Held, OrientationTerm, PointTarget, PointTerm, TermParameters};
 use super::BlendError;
 use crate::mesh::Point;
 use std::sync::Arc;
@@ -75,7 +75,8 @@ impl Rig {
         let held = Held::new(n, targets, free);
         let mut soft: Vec<PointTarget> = targets.iter().filter(|t| !t.is_hard()).copied().collect();
         // P(w) in solver coordinates: the tether's targets, and the start when none is given.
-        let predicted = (self.options.tether > 0.0 || start_from.is_none())
+        let guarded = self.guard_weight > 0.0;
+        let predicted = (self.options.tether > 0.0 || start_from.is_none() || guarded)
             .then(|| self.start(&lin, rotated.as_deref(), None));
         if let Some(p) = predicted.as_deref().filter(|_| self.options.tether > 0.0) {
             soft.extend(super::tether::targets(p, free, self.options.tether));
@@ -88,6 +89,14 @@ impl Rig {
         let mut params: Vec<TermParameters> = self.terms.iter().map(|t| t.prepare(c)).collect();
         if !soft.is_empty() {
             terms.push(&points);
+            params.push(TermParameters::default());
+        }
+        let guard = predicted.as_deref().filter(|_| guarded).map(|p| {
+            let world = rotated.as_deref().unwrap_or(&lin);
+            OrientationTerm::new(self.shapes.triangles(), p, world, &lin, self.guard_weight)
+        });
+        if let Some(g) = &guard {
+            terms.push(g);
             params.push(TermParameters::default());
         }
         let mut x = match (start_from, predicted) {

@@ -44,16 +44,6 @@ pub const ICT_EXPRESSIONS: [&str; 10] = [
     "mouthSmile_R",
 ];
 
-/// Folded triangles beyond the linear blend's that an ICT expression's frames may have: 1 for
-/// jawLeft (at ½ and in a 36-step sequence at frames 16–17: one small triangle at the left
-/// mouth corner, where jawLeft itself presses the lips into dihedral angles of ±150°), 0 for
-/// every other. jawLeft folds it in a rig of the neutral and jawLeft alone too; the full rig
-/// used to hide it by holding jawOpen's mouth interior in every frame, until frames came to
-/// depend only on their own weights (issue 40, docs/fidelity.md).
-pub fn ict_known_fold_excess(expression: &str) -> usize {
-    usize::from(expression == "jawLeft")
-}
-
 /// The ICT rig's files: the neutral head, then [`ICT_EXPRESSIONS`]; `None` when
 /// `MORPHKIT_DATA` is unset.
 pub fn ict_rig_paths() -> Option<Vec<PathBuf>> {

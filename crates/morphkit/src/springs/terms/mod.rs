@@ -14,11 +14,14 @@
 //! (and, by symmetry, $B^\top$ at `(j, i)`).
 
 mod hinge;
+mod orientation;
 mod points;
 mod spring;
 mod volume;
 
 pub use hinge::{HingeOptions, HingeTerm};
+pub(crate) use orientation::OrientationTerm;
+pub use orientation::{AGREE_COS, GUARD_FROM};
 pub use points::PointTarget;
 pub(crate) use points::{Held, PointTerm};
 pub use spring::SpringTerm;
