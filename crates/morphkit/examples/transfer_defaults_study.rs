@@ -18,123 +18,23 @@
 #[path = "../tests/common/mod.rs"]
 mod common;
 
+use common::defaults::{measure_all, Cell, CONFIGS, OLD_DEFAULT};
 use common::Pair;
-use morphkit::transfer::{
-    correspond, cycle_consistency, Correspondence, CorrespondenceOptions, GradientFrame,
-    RefineOptions, TransferOptions, TriangleWeighting,
-};
 use std::time::Instant;
 
-/// One configuration: its CLI flags (against the old defaults) and its switches.
-struct Config {
-    flags: &'static str,
-    refine: bool,
-    local: bool,
-    area: bool,
-    guard: bool,
-}
-
-/// The fold guard acts only in the local-stretch frame, so the world-frame configurations
-/// are listed once.
-const CONFIGS: [Config; 6] = [
-    Config {
-        flags: "(old default)",
-        refine: false,
-        local: false,
-        area: false,
-        guard: false,
-    },
-    Config {
-        flags: "--refine",
-        refine: true,
-        local: false,
-        area: false,
-        guard: false,
-    },
-    Config {
-        flags: "--local-stretch --area-weighted",
-        refine: false,
-        local: true,
-        area: true,
-        guard: true,
-    },
-    Config {
-        flags: "--local-stretch --area-weighted --no-fold-guard",
-        refine: false,
-        local: true,
-        area: true,
-        guard: false,
-    },
-    Config {
-        flags: "--refine --local-stretch --area-weighted",
-        refine: true,
-        local: true,
-        area: true,
-        guard: true,
-    },
-    Config {
-        flags: "--refine --local-stretch --area-weighted --no-fold-guard",
-        refine: true,
-        local: true,
-        area: true,
-        guard: false,
-    },
-];
-
-impl Config {
-    fn transfer_options(&self) -> TransferOptions {
-        // Every switch is set here, so the study does not depend on the library's defaults.
-        let mut t = TransferOptions::default();
-        t.frame = if self.local {
-            GradientFrame::LocalStretch
-        } else {
-            GradientFrame::World
-        };
-        t.solver.weighting = if self.area {
-            TriangleWeighting::Area
-        } else {
-            TriangleWeighting::Uniform
-        };
-        if !self.guard {
-            t.fold_guard = None;
-        }
-        t
-    }
-}
-
-/// One pair × configuration.
-#[derive(Clone, Copy, Default)]
-struct Cell {
-    mean: f64,
-    max: f64,
-    folds: usize,
-    flipped: usize,
-    /// Seconds for the cycle (set-up and every frame there and back).
-    cycle_s: f64,
-}
-
-/// Correspondences both ways and the seconds of the forward one.
-fn corr_pair(p: &Pair, o: &CorrespondenceOptions) -> (Correspondence, Correspondence, f64) {
-    let t = Instant::now();
-    let f = correspond(&p.a_corr, &p.b, &p.markers, o)
-        .unwrap()
-        .correspondence;
-    let s = t.elapsed().as_secs_f64();
-    let b = correspond(&p.b, &p.a_corr, &p.markers.reversed(), o)
-        .unwrap()
-        .correspondence;
-    (f, b, s)
-}
-
-/// Relative change of `c`'s mean cycle error against the old default's (config 0).
+/// Relative change of `c`'s mean cycle error against the old default's.
 fn change(row: &[Cell], c: usize) -> f64 {
-    row[c].mean / row[0].mean - 1.0
+    row[c].mean / row[OLD_DEFAULT].mean - 1.0
 }
 
 /// The eligible configuration with the lowest mean change over `pairs` (indices into `rows`).
 fn choose(rows: &[Vec<Cell>], pairs: &[usize]) -> usize {
     (0..CONFIGS.len())
-        .filter(|&c| pairs.iter().all(|&p| rows[p][c].folds <= rows[p][0].folds))
+        .filter(|&c| {
+            pairs
+                .iter()
+                .all(|&p| rows[p][c].folds <= rows[p][OLD_DEFAULT].folds)
+        })
         .min_by(|&a, &b| {
             let s = |c| pairs.iter().map(|&p| change(&rows[p], c)).sum::<f64>();
             s(a).total_cmp(&s(b))
@@ -166,50 +66,8 @@ fn main() {
     // Forward correspondence seconds per pair: [plain, refined].
     let mut corr_s: Vec<[f64; 2]> = Vec::new();
     for p in &pairs {
-        let plain = corr_pair(
-            p,
-            &CorrespondenceOptions {
-                refine: None,
-                ..Default::default()
-            },
-        );
-        let refined = corr_pair(
-            p,
-            &CorrespondenceOptions {
-                refine: Some(RefineOptions::default()),
-                ..Default::default()
-            },
-        );
-        corr_s.push([plain.2, refined.2]);
-        let mut row = Vec::new();
-        for c in &CONFIGS {
-            let (f, b) = if c.refine {
-                (&refined.0, &refined.1)
-            } else {
-                (&plain.0, &plain.1)
-            };
-            let t = Instant::now();
-            let q =
-                cycle_consistency(&p.a_ref, &p.frames, &p.b, f, b, &c.transfer_options()).unwrap();
-            let cell = Cell {
-                mean: q.mean,
-                max: q.max,
-                folds: q.forward_sharp_folds.iter().sum(),
-                flipped: q.forward_flipped.iter().sum(),
-                cycle_s: t.elapsed().as_secs_f64(),
-            };
-            eprintln!(
-                "{:<15} {:<58} mean {:.4} % max {:.3} % sharp folds {:>4} flipped {:>5} ({:.1} s)",
-                p.name,
-                c.flags,
-                100.0 * cell.mean,
-                100.0 * cell.max,
-                cell.folds,
-                cell.flipped,
-                cell.cycle_s
-            );
-            row.push(cell);
-        }
+        let (row, secs) = measure_all(p);
+        corr_s.push(secs);
         rows.push(row);
     }
     report(&pairs, &rows, &corr_s);
@@ -217,6 +75,11 @@ fn main() {
 }
 
 fn report(pairs: &[Pair], rows: &[Vec<Cell>], corr_s: &[[f64; 2]]) {
+    println!("Configurations (`morphkit transfer` flags against the new defaults)\n");
+    for c in &CONFIGS {
+        println!("- {}: `{}`", c.name, c.flags);
+    }
+    println!();
     let frames: Vec<usize> = pairs.iter().map(|p| p.frames.len()).collect();
     println!(
         "Mean cycle error, % of the diagonal (change against the old default) · sharp folds\n"
@@ -229,7 +92,7 @@ fn report(pairs: &[Pair], rows: &[Vec<Cell>], corr_s: &[[f64; 2]]) {
     println!("|---|{}---|", "---|".repeat(pairs.len()));
     let all: Vec<usize> = (0..pairs.len()).collect();
     for (c, cfg) in CONFIGS.iter().enumerate() {
-        print!("| `{}` |", cfg.flags);
+        print!("| {} |", cfg.name);
         for row in rows {
             print!(
                 " {:.3} ({:+.1} %) · {} |",
@@ -249,19 +112,19 @@ fn report(pairs: &[Pair], rows: &[Vec<Cell>], corr_s: &[[f64; 2]]) {
         let c = choose(rows, &others);
         let best = choose(rows, &[h]);
         println!(
-            "| {} | `{}` | {:+.1} % · {} ({}) | `{}` ({:+.1} %) |",
+            "| {} | {} | {:+.1} % · {} ({}) | {} ({:+.1} %) |",
             pairs[h].name,
-            CONFIGS[c].flags,
+            CONFIGS[c].name,
             100.0 * change(&rows[h], c),
             rows[h][c].folds,
             rows[h][0].folds,
-            CONFIGS[best].flags,
+            CONFIGS[best].name,
             100.0 * change(&rows[h], best)
         );
     }
     println!(
         "\nChosen on all pairs: `{}`\n",
-        CONFIGS[choose(rows, &all)].flags
+        CONFIGS[choose(rows, &all)].name
     );
     println!("Cost: forward correspondence (s) and cycle seconds per frame (there and back, with set-up)\n");
     print!("| configuration |");
@@ -271,7 +134,7 @@ fn report(pairs: &[Pair], rows: &[Vec<Cell>], corr_s: &[[f64; 2]]) {
     println!();
     println!("|---|{}", "---|".repeat(pairs.len()));
     for (c, cfg) in CONFIGS.iter().enumerate() {
-        print!("| `{}` |", cfg.flags);
+        print!("| {} |", cfg.name);
         for (i, row) in rows.iter().enumerate() {
             print!(
                 " {:.2} s + {:.2} s/fr |",
@@ -283,7 +146,7 @@ fn report(pairs: &[Pair], rows: &[Vec<Cell>], corr_s: &[[f64; 2]]) {
     }
     println!("\nLargest cycle error, % · flipped triangles\n");
     for (c, cfg) in CONFIGS.iter().enumerate() {
-        print!("| `{}` |", cfg.flags);
+        print!("| {} |", cfg.name);
         for row in rows {
             print!(" {:.2} · {} |", 100.0 * row[c].max, row[c].flipped);
         }

@@ -1,6 +1,7 @@
 //! Shared helpers for integration tests: access to the real meshes under `MORPHKIT_DATA`.
 #![allow(dead_code)]
 
+pub mod defaults;
 pub mod sequence;
 pub mod tail;
 
