@@ -95,21 +95,23 @@ impl Config {
 
     /// The transfer options, every switch set (independent of the library's defaults).
     pub fn transfer_options(&self) -> TransferOptions {
-        let mut t = TransferOptions::default();
-        t.frame = if self.local {
-            GradientFrame::LocalStretch
-        } else {
-            GradientFrame::World
-        };
-        t.solver.weighting = if self.area {
-            TriangleWeighting::Area
-        } else {
-            TriangleWeighting::Uniform
-        };
-        if !self.guard {
-            t.fold_guard = None;
+        TransferOptions {
+            frame: if self.local {
+                GradientFrame::LocalStretch
+            } else {
+                GradientFrame::World
+            },
+            solver: morphkit::transfer::SolverOptions {
+                weighting: if self.area {
+                    TriangleWeighting::Area
+                } else {
+                    TriangleWeighting::Uniform
+                },
+                ..Default::default()
+            },
+            fold_guard: self.guard.then(Default::default),
+            ..Default::default()
         }
-        t
     }
 }
 
