@@ -353,12 +353,18 @@ impl PyTransfer {
             translation,
             ..TransferOptions::default()
         };
-        if local_stretch {
-            opts.frame = GradientFrame::LocalStretch;
-        }
-        if area_weighted {
-            opts.solver.weighting = TriangleWeighting::Area;
-        }
+        // Both set either way: the library's defaults became local stretch and area weights in
+        // issue 40; these keyword defaults are unchanged.
+        opts.frame = if local_stretch {
+            GradientFrame::LocalStretch
+        } else {
+            GradientFrame::World
+        };
+        opts.solver.weighting = if area_weighted {
+            TriangleWeighting::Area
+        } else {
+            TriangleWeighting::Uniform
+        };
         if !fold_guard {
             opts.fold_guard = None;
         }

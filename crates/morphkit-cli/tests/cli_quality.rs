@@ -1,5 +1,5 @@
 //! Issue 9: the quality metrics in `correspond --report` and `transfer --report`, and the
-//! `--refine` / `--one-way` / `--combine` / `--local-stretch` flags, run as the built binary on
+//! `--refine` / `--no-refine` / `--one-way` / `--combine` / `--local-stretch` flags, run as the built binary on
 //! generated tubes.
 
 mod common;
@@ -31,10 +31,12 @@ fn reports_carry_quality_and_cycle_consistency() {
     let markers = d.join("markers.json");
     std::fs::write(&markers, format!("{{\"pairs\": [{}]}}", pairs.join(", "))).unwrap();
     let corr = d.join("corr.json");
+    // Refined by default since issue 40; `--refine` names the default.
     for (flags, refined) in [
-        (vec![], false),
+        (vec![], true),
         (vec!["--refine"], true),
-        (vec!["--one-way"], false),
+        (vec!["--no-refine"], false),
+        (vec!["--one-way", "--no-refine"], false),
     ] {
         let rep = d.join("corr-report.json");
         let mut args = vec![
@@ -57,7 +59,7 @@ fn reports_carry_quality_and_cycle_consistency() {
         assert_eq!(r["refined"], refined, "{flags:?}");
         assert!(q["normal_pass_fraction"].as_f64().unwrap() > 0.99, "{r}");
         let coverage = q["source_coverage"].as_f64().unwrap();
-        if flags.is_empty() || refined {
+        if !flags.contains(&"--one-way") {
             assert_eq!(
                 coverage, 1.0,
                 "{flags:?}: two-way matching reaches every source triangle"
@@ -137,7 +139,38 @@ fn reports_carry_quality_and_cycle_consistency() {
     // The fold guard reports, per frame, the triangles it left unturned.
     let guarded = json(&local)["fold_guard_unturned_triangles_per_frame"].clone();
     assert_eq!(guarded.as_array().map(Vec::len), Some(2), "{guarded}");
-    // --no-fold-guard only goes with --local-stretch.
+    // The old defaults run: --no-refine --world-frame --uniform-weights, without the guard.
+    let old = d.join("transfer-old.json");
+    ok(&[
+        "transfer",
+        "--source-ref",
+        s(&src),
+        "--source",
+        &format!("{}/frame-*.obj", d.display()),
+        "--target",
+        s(&tgt),
+        "--markers",
+        s(&markers),
+        "--out",
+        s(&d.join("out-old")),
+        "--report",
+        s(&old),
+        "--no-refine",
+        "--world-frame",
+        "--uniform-weights",
+    ]);
+    let old = json(&old);
+    assert_eq!(old["correspondence"]["refined"], false);
+    // The world frame turns nothing, so the guard leaves nothing unturned.
+    let unturned = &old["fold_guard_unturned_triangles_per_frame"];
+    assert!(
+        unturned
+            .as_array()
+            .is_some_and(|a| a.len() == 2 && a.iter().all(|x| x == 0)),
+        "{unturned}"
+    );
+    assert!(old["cycle_consistency"]["mean_relative"].as_f64().unwrap() > 0.0);
+    // --no-fold-guard does not go with --world-frame (the guard acts in the local frame).
     let e = fails(&[
         "transfer",
         "--source-ref",
@@ -150,9 +183,10 @@ fn reports_carry_quality_and_cycle_consistency() {
         s(&markers),
         "--out",
         s(&d.join("out3")),
+        "--world-frame",
         "--no-fold-guard",
     ]);
-    assert!(e.contains("--local-stretch"), "{e}");
+    assert!(e.contains("--world-frame"), "{e}");
     let e = fails(&[
         "transfer",
         "--source-ref",

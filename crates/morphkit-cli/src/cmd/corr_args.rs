@@ -1,6 +1,6 @@
 //! The correspondence arguments that `morphkit transfer` and `morphkit rig` share: markers
 //! (the correspondence is computed first) or a correspondence file, how matched gradients
-//! combine, and the optional closest-point refinement.
+//! combine, and the closest-point refinement (on by default; `--no-refine`).
 
 use super::correspond::{confidence_summary, print_summary, summary};
 use anyhow::{bail, Context};
@@ -13,7 +13,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 /// Where the correspondence comes from, and how it is used.
-#[derive(clap::Args, Debug)]
+#[derive(clap::Args, Clone, Debug)]
 pub struct CorrespondenceArgs {
     /// Marker pairs (computes the correspondence first).
     #[arg(long, value_name = "JSON", conflicts_with = "correspondence")]
@@ -26,9 +26,13 @@ pub struct CorrespondenceArgs {
     #[arg(long, default_value = "inverse-distance", value_parser = ["inverse-distance", "mean", "nearest"])]
     pub combine: String,
     /// With --markers: refine the correspondence by closest points (Sumner & Popović 2004,
-    /// Sec. 5) before matching.
-    #[arg(long)]
+    /// Sec. 5) before matching. The default of `transfer` (issue 40), not of `rig`.
+    #[arg(long, conflicts_with = "no_refine")]
     pub refine: bool,
+    /// With --markers: match the two least-squares warps directly, without the closest-point
+    /// refinement (the default of `rig`, and of `transfer` before issue 40).
+    #[arg(long)]
+    pub no_refine: bool,
 }
 
 /// A correspondence obtained from [`CorrespondenceArgs`].
@@ -53,6 +57,11 @@ impl CorrespondenceArgs {
     /// The input files these arguments name (none is ever written).
     pub fn inputs(&self) -> impl Iterator<Item = PathBuf> + '_ {
         self.markers.iter().chain(&self.correspondence).cloned()
+    }
+
+    /// The refinement `--refine` / `--no-refine` ask for: on unless `--no-refine`.
+    pub fn refine_options(&self) -> Option<RefineOptions> {
+        (self.refine || !self.no_refine).then(RefineOptions::default)
     }
 
     /// `--combine` as the library's option.
@@ -81,7 +90,7 @@ impl CorrespondenceArgs {
             crate::util::announce_work("computing the correspondence", target.num_vertices());
             let t0 = Instant::now();
             let copts = CorrespondenceOptions {
-                refine: self.refine.then(RefineOptions::default),
+                refine: self.refine_options(),
                 ..Default::default()
             };
             let r = correspond(source, target, &markers, &copts).context("correspondence")?;

@@ -223,8 +223,14 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
     } else {
         source_weld.shapes(&shapes)?
     };
+    // Unrefined unless --refine: issue 40 made the refinement `transfer`'s default, but on
+    // the ICT head onto a rotated, scaled copy of itself (a known answer) it raised the
+    // largest error of cheekPuff_L from under 0.2 % to 6.9 % of its motion
+    // (tests/transfer_rig_real_data.rs).
+    let mut corr_args = args.corr.clone();
+    corr_args.no_refine = !corr_args.refine;
     let corr = weld_util::obtain_welded(
-        &args.corr,
+        &corr_args,
         (&neutral, &source_weld),
         (&target, &target_weld),
         &mut report,

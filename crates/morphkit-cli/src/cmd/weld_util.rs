@@ -7,9 +7,7 @@ use super::corr_args::{CorrespondenceArgs, Obtained};
 use super::correspond::{confidence_summary, print_summary, summary};
 use anyhow::{bail, Context};
 use morphkit::mesh::{Point, Weld};
-use morphkit::transfer::{
-    correspond, Correspondence, CorrespondenceOptions, Markers, RefineOptions,
-};
+use morphkit::transfer::{correspond, Correspondence, CorrespondenceOptions, Markers};
 use morphkit::TriMesh;
 use std::time::Instant;
 
@@ -127,7 +125,7 @@ pub fn obtain_welded(
     crate::util::announce_work("computing the correspondence", target.num_vertices());
     let t0 = Instant::now();
     let copts = CorrespondenceOptions {
-        refine: args.refine.then(RefineOptions::default),
+        refine: args.refine_options(),
         ..Default::default()
     };
     let mut r = correspond(source, target, &markers, &copts).context("correspondence")?;

@@ -126,10 +126,13 @@ pub fn heldout() {
         .collect();
     let base_c = CorrespondenceOptions {
         two_way: false,
+        refine: None,
         ..Default::default()
     };
     let base_t = TransferOptions {
         combine: morphkit::transfer::GradientCombine::Mean,
+        frame: GradientFrame::World,
+        solver: morphkit::transfer::SolverOptions::default(),
         ..Default::default()
     };
     let refined = CorrespondenceOptions {

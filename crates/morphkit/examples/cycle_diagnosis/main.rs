@@ -5,7 +5,10 @@
 //! (default `diagnosis`; `DIAG_DUMP=dir` also writes per-vertex error maps as CSV there;
 //! `explore` measures the correspondence and transfer variants given in `EXPLORE`;
 //! `heldout` and `foldwhere` the held-out animations and the stretch-turning variants, see
-//! `heldout.rs`).
+//! `heldout.rs`). Written before issue 40 changed the transfer defaults: its correspondences
+//! and baselines name their options; other transfer settings it leaves unnamed follow the new
+//! defaults (local stretch, area weights). The defaults' own study is
+//! `examples/transfer_defaults_study.rs`.
 
 #[path = "../../tests/common/mod.rs"]
 mod common;

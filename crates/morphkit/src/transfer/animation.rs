@@ -18,7 +18,7 @@ use super::correspondence::{polar, Correspondence, GradientCombine};
 use super::error::{Side, TransferError};
 use super::fold_guard::{guarded_solve, FoldGuard, GuardOutcome, GuardedFrame};
 use super::gradients::{FlipCheck, GradientOperator};
-use super::solve::{SolverOptions, TransferSolver};
+use super::solve::{SolverOptions, TransferSolver, TriangleWeighting};
 use crate::mesh::{validate, Point, ShapeSet, ShapeSetError, Topology, TriMesh};
 use nalgebra::{Matrix3, Vector3};
 
@@ -43,8 +43,7 @@ pub enum TranslationMode {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum GradientFrame {
     /// Sumner & Popović as written: the matched gradients as they are, combined linearly
-    /// ([`Correspondence::map_gradients`]). Default.
-    #[default]
+    /// ([`Correspondence::map_gradients`]). The default before issue 40.
     World,
     /// The rotations combined by their chordal mean (the projection of the weighted sum
     /// onto the rotations) and each match's stretch turned by the smallest rotation from its
@@ -52,28 +51,32 @@ pub enum GradientFrame {
     /// by how well their reference normals agree ([`Correspondence::map_gradients_local`]);
     /// each target triangle's term of the solve is weighted by the confidence of its matches
     /// ([`Correspondence::local_confidence`], Sumner & Popović 2004, Sec. 4: one term per
-    /// matched pair). Measured on horse ↔ camel and cat ↔ dog (README, issue 9) it lowers
-    /// the mean cycle-consistency error by 24–25 %, but alone, without the fold guard, it
-    /// makes more sharp folds (camel: 77 → 87 over ten poses, dog: 99 → 104 over 36 frames),
-    /// so it is opt-in; with the closest-point refinement, area-weighted solves and the fold
-    /// guard ([`TransferOptions::fold_guard`], on by default) it lowers the cycle error by
-    /// 25.6–32.8 % with fewer sharp folds than the baseline, also on the held-out horse
-    /// gallop (−30.4 %, 96 sharp folds against 228 over 48 frames; 488 unguarded), but
-    /// flips more triangles against their wanted orientation (camel 593 against 316).
+    /// matched pair). Default (issue 40): with the closest-point refinement, area-weighted
+    /// solves and the fold guard ([`TransferOptions::fold_guard`]) it came closest in a
+    /// leave-one-out study over four real pairs (docs/fidelity.md, "Transfer defaults"):
+    /// mean cycle-consistency error 18.6–32.5 % lower than the world frame's, with fewer
+    /// sharp folds on each pair (horse gallop onto the camel: 96 against 208 over 48 frames;
+    /// 488 unguarded), but more triangles flipped against their wanted orientation (camel
+    /// 593 against 320) and about 8× the per-frame solve time. Alone, without the fold guard,
+    /// it makes more sharp folds than the world frame.
+    #[default]
     LocalStretch,
 }
 
 /// Options of [`AnimationTransfer`].
 #[derive(Clone, Debug)]
 pub struct TransferOptions {
-    /// Options of the prefactored solve (weights, constraint vertices).
+    /// Options of the prefactored solve (weights, constraint vertices). Default: area
+    /// weights ([`TriangleWeighting::Area`], issue 40; `SolverOptions::default()` alone keeps
+    /// the paper's uniform weights).
     pub solver: SolverOptions,
     /// How the gradients of several matched source triangles combine. Default: inverse
     /// distance.
     pub combine: GradientCombine,
     /// Translation convention. Default: follow the markers.
     pub translation: TranslationMode,
-    /// Frame in which matched gradients are carried over. Default: the world frame.
+    /// Frame in which matched gradients are carried over. Default: local stretch (issue 40;
+    /// [`GradientFrame::World`] is the paper's and the default before).
     pub frame: GradientFrame,
     /// With [`GradientFrame::LocalStretch`]: where a frame creases, its stretches are not
     /// turned there ([`FoldGuard`], module [`super::fold_guard`]). Default: on; `None` turns
@@ -84,7 +87,10 @@ pub struct TransferOptions {
 impl Default for TransferOptions {
     fn default() -> Self {
         Self {
-            solver: SolverOptions::default(),
+            solver: SolverOptions {
+                weighting: TriangleWeighting::Area,
+                ..Default::default()
+            },
             combine: GradientCombine::default(),
             translation: TranslationMode::default(),
             frame: GradientFrame::default(),

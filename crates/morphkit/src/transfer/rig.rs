@@ -28,12 +28,26 @@ use crate::mesh::{validate, Point, ShapeSet, Topology, TriMesh};
 use nalgebra::{Matrix3, Vector3};
 
 /// Options of [`RigTransfer`].
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct RigOptions {
     /// Transfer options (triangle weights, constraint vertices, gradient combination). The
     /// translation mode is ignored: a rig uses the no-root-motion convention of the
-    /// [module docs](self).
+    /// [module docs](self). Default: the world frame and uniform weights, the
+    /// [`TransferOptions`] defaults before issue 40 (its study of the defaults measured
+    /// animations between characters, not rigs).
     pub transfer: TransferOptions,
+}
+
+impl Default for RigOptions {
+    fn default() -> Self {
+        Self {
+            transfer: TransferOptions {
+                solver: super::solve::SolverOptions::default(),
+                frame: super::animation::GradientFrame::World,
+                ..Default::default()
+            },
+        }
+    }
 }
 
 /// One transferred expression.

@@ -1,6 +1,7 @@
 //! Shared helpers for integration tests: access to the real meshes under `MORPHKIT_DATA`.
 #![allow(dead_code)]
 
+pub mod defaults;
 pub mod sequence;
 pub mod tail;
 
@@ -179,6 +180,40 @@ pub fn gallop_camel() -> Option<Pair> {
                 .iter()
                 .map(|q| q.map(|x| x / 1.6768815))
                 .collect()
+        })
+        .collect();
+    Some(p)
+}
+
+/// Horse collapse → camel (Sumner's cloth-simulated collapse, 27 of its 53 frames): vertices
+/// put into the standard horse order by `collapse_to_standard_vertex_map.json`, divided by
+/// the 1.6768815 scale, with the horse ↔ camel markers.
+pub fn collapse_camel() -> Option<Pair> {
+    let mut p = horse_camel()?;
+    let map = data_file("sumner-horse-collapse/collapse_to_standard_vertex_map.json")?;
+    let map: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(map).unwrap()).unwrap();
+    let map: Vec<usize> = map["collapse_to_standard"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap() as usize)
+        .collect();
+    p.name = "collapse→camel";
+    p.frames = (1..=53)
+        .step_by(2)
+        .map(|i| {
+            let path = data_file(&format!(
+                "sumner-horse-collapse/horse-collapse-{i:02}.obj.gz"
+            ))
+            .unwrap();
+            let m = morphkit::io::read_mesh(&path).unwrap();
+            assert_eq!(m.num_vertices(), map.len(), "{}", path.display());
+            let mut out = vec![[0.0; 3]; m.num_vertices()];
+            for (i, q) in m.positions.iter().enumerate() {
+                out[map[i]] = q.map(|x| x / 1.6768815);
+            }
+            out
         })
         .collect();
     Some(p)

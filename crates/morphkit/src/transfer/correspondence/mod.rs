@@ -48,11 +48,13 @@ pub struct CorrespondenceOptions {
     pub max_matches: usize,
     /// Closest-point refinement of the source warp ([`refine`], Sumner & Popović 2004,
     /// Sec. 5) before matching; `None` matches the two least-squares warps directly (Wang &
-    /// Lee's one-stage correspondence). Default `None`: measured on horse ↔ camel and
-    /// cat ↔ dog (`tests/transfer_quality_real_data.rs`), the refinement lowers the mean
-    /// cycle-consistency error by only 3–5 % (the maximum by 13–17 %, sharp folds on the camel
-    /// 77 → 26) for about twice the time, and flips more triangles (316 → 418 over the ten
-    /// camel poses), so it is opt-in.
+    /// Lee's one-stage correspondence). Default on (`RefineOptions::default()`, issue 40):
+    /// with the local-stretch frame and area-weighted solves (the [`TransferOptions`]
+    /// defaults) it came closest in a leave-one-out study over horse → camel, cat → dog and
+    /// the horse gallop and collapse onto the camel (docs/fidelity.md, "Transfer defaults";
+    /// `examples/transfer_defaults_study.rs`), for about 1.7× the correspondence time.
+    ///
+    /// [`TransferOptions`]: crate::transfer::TransferOptions
     pub refine: Option<RefineOptions>,
     /// Also add every usable source triangle to its nearest compatible target triangle's
     /// matches ([`matching`]). Default true.
@@ -68,7 +70,7 @@ impl Default for CorrespondenceOptions {
             lsmesh: LsMeshOptions::default(),
             radius_factor: 1.0,
             max_matches: 8,
-            refine: None,
+            refine: Some(RefineOptions::default()),
             two_way: true,
             min_normal_cos: 0.0,
         }
