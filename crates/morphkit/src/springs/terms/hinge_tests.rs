@@ -1,6 +1,7 @@
 //! Tests of the parent module (kept apart so that the module itself stays one concept).
 use super::super::check::{
-    bound_hessians_match, dense_hessian, fused_hessians_match, gradient_error, hessian_error,
+    assert_projected_psd, bound_hessians_match, dense_hessian, fused_hessians_match,
+    gradient_error, hessian_error,
 };
 use super::*;
 use crate::mesh::generate;
@@ -68,17 +69,8 @@ fn gradient_matches_finite_differences_and_hessians_are_right() {
         worst < 1e-5 * scale,
         "exact Hessian error {worst} (scale {scale})"
     );
-    let hm = dense_hessian(&term, &p, &x, HessianKind::Projected);
     // Gauss–Newton: symmetric positive semi-definite.
-    let n = x.len();
-    let dm = nalgebra::DMatrix::from_fn(n, n, |r, c| hm[r][c]);
-    assert!((&dm - dm.transpose()).norm() < 1e-12 * dm.norm());
-    let eig = dm.symmetric_eigenvalues();
-    assert!(
-        eig.min() > -1e-9 * eig.max(),
-        "min eigenvalue {}",
-        eig.min()
-    );
+    assert_projected_psd(&term, &p, &x);
 }
 
 #[test]

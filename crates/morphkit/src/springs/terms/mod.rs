@@ -303,6 +303,21 @@ pub(crate) mod check {
     //! Finite-difference checks shared by the term tests.
     use super::*;
 
+    /// Asserts that the term's projected Hessian at `x` is symmetric positive semi-definite
+    /// (the Gauss–Newton part of a least-squares term).
+    pub fn assert_projected_psd(t: &dyn EnergyTerm, p: &TermParameters, x: &[f64]) {
+        let hm = dense_hessian(t, p, x, HessianKind::Projected);
+        let n = x.len();
+        let dm = nalgebra::DMatrix::from_fn(n, n, |r, c| hm[r][c]);
+        assert!((&dm - dm.transpose()).norm() < 1e-12 * dm.norm());
+        let eig = dm.symmetric_eigenvalues();
+        assert!(
+            eig.min() > -1e-9 * eig.max(),
+            "min eigenvalue {}",
+            eig.min()
+        );
+    }
+
     /// Max abs difference between the analytic gradient and central differences.
     pub fn gradient_error(t: &dyn EnergyTerm, p: &TermParameters, x: &[f64]) -> (f64, f64) {
         let mut g = vec![0.0; x.len()];

@@ -183,7 +183,7 @@ impl EnergyTerm for OrientationTerm<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::check::{dense_hessian, gradient_error, hessian_error};
+    use super::super::check::{assert_projected_psd, dense_hessian, gradient_error, hessian_error};
     use super::*;
     use crate::mesh::generate;
 
@@ -232,15 +232,6 @@ mod tests {
             "Hessian error {worst} of {scale}"
         );
         // Gauss–Newton: symmetric positive semi-definite.
-        let hm = dense_hessian(&term, &p, &x, HessianKind::Projected);
-        let n = x.len();
-        let dm = nalgebra::DMatrix::from_fn(n, n, |r, c| hm[r][c]);
-        assert!((&dm - dm.transpose()).norm() < 1e-12 * dm.norm());
-        let eig = dm.symmetric_eigenvalues();
-        assert!(
-            eig.min() > -1e-9 * eig.max(),
-            "min eigenvalue {}",
-            eig.min()
-        );
+        assert_projected_psd(&term, &p, &x);
     }
 }
