@@ -34,6 +34,28 @@ pub enum FixedVertices {
     Ids(Vec<u32>),
 }
 
+/// Whether a vertex moves in a shape: farther than `1e-6 ×` the base's bounding-box diagonal
+/// from its base position (the rule of [`FixedVertices::Auto`], per rig and per frame).
+pub(crate) struct Moves<'a> {
+    shapes: &'a ShapeSet,
+    tolerance: f64,
+}
+
+impl<'a> Moves<'a> {
+    pub(crate) fn new(shapes: &'a ShapeSet) -> Self {
+        Self {
+            shapes,
+            tolerance: 1e-6 * bbox_diagonal(shapes.positions(0)),
+        }
+    }
+
+    /// Whether vertex `v` moves in shape `s`.
+    pub(crate) fn in_shape(&self, s: usize, v: usize) -> bool {
+        let base = self.shapes.positions(0)[v];
+        norm(sub(self.shapes.positions(s)[v], base)) > self.tolerance
+    }
+}
+
 /// The resolved constraints of a shape set.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Constraints {
@@ -93,10 +115,9 @@ impl Constraints {
                 }
             }
             FixedVertices::Auto => {
-                let tol = 1e-6 * bbox_diagonal(base);
+                let moves = Moves::new(shapes);
                 for (v, f) in is_fixed.iter_mut().enumerate() {
-                    *f = (1..shapes.len())
-                        .all(|s| norm(sub(shapes.positions(s)[v], base[v])) <= tol);
+                    *f = (1..shapes.len()).all(|s| !moves.in_shape(s, v));
                 }
                 if shapes.len() == 1 {
                     is_fixed.iter_mut().for_each(|f| *f = false);

@@ -33,9 +33,10 @@
 //! gauge is solved in its own frame, where a hold towards the world's linear blend would
 //! pull it; such components keep the rig-wide rule.
 
+use super::constraints::Moves;
 use super::terms::PointTarget;
 use super::Constraints;
-use crate::mesh::{bbox_diagonal, norm, sub, Point, ShapeSet};
+use crate::mesh::{Point, ShapeSet};
 
 /// Stiffness (units of the mean spring) from which a hold is a boundary condition: the step
 /// it leaves, the neighbours' force over this stiffness, is a millionth of a spring's pull.
@@ -118,12 +119,10 @@ impl FrameHolds {
             ..Default::default()
         };
         if automatic && shapes.len() > 1 {
-            let base = shapes.positions(0);
-            let tol = 1e-6 * bbox_diagonal(base);
-            let moves = |v: usize| {
-                (1..shapes.len() as u32)
-                    .filter(move |&s| norm(sub(shapes.positions(s as usize)[v], base[v])) > tol)
-            };
+            let rule = Moves::new(shapes);
+            let rule = &rule;
+            let moves =
+                |v: usize| (1..shapes.len() as u32).filter(move |&s| rule.in_shape(s as usize, v));
             for v in 0..n {
                 if anchored[v] && !is_fixed[v] {
                     holds.moved.push(v as u32, moves(v));
