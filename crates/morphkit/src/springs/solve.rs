@@ -10,7 +10,7 @@ use super::predictor;
 use super::reference::{Factor, Reference, References, GRID, PROBE};
 use super::rig::Rig;
 use super::sampled_start::{half_weight, shifted, SampleSolver, SAMPLES};
-use super::terms::{EnergyTerm, Held, OrientationTerm, PointTarget, PointTerm, TermParameters};
+use super::terms::PointTarget;
 use super::BlendError;
 use crate::mesh::Point;
 use std::sync::Arc;
@@ -38,20 +38,8 @@ impl Rig {
     ) -> Result<BlendResult, BlendError> {
         let start = Instant::now();
         self.check_targets(targets)?;
-        let lin = predictor::linear(&self.shapes, c);
-        // The frame's own holds first, so that a user's target on the same vertex wins.
-        let mut all_targets = self.holds.targets(c, &lin);
-        let holds = all_targets.len();
-        all_targets.extend_from_slice(targets);
-        let targets = &all_targets[..];
-        // One Poisson solve per frame: a given start needs the prediction only for the bands.
-        let rotated = match from {
-            // The tether pulls towards P, so it needs the prediction whatever the start.
-            Start::From(_) if self.constraints.bands.is_empty() && self.options.tether == 0.0 => {
-                None
-            }
-            _ => self.rotation_prediction(c, &lin, &targets[..holds]),
-        };
+        let frame = self.frame_energy(c, targets, !matches!(from, Start::From(_)), false);
+        let (lin, rotated) = (&frame.lin, frame.rotated.as_deref());
         let corrected;
         let start_from = match from {
             Start::From(p) => Some(p),
@@ -59,8 +47,8 @@ impl Rig {
             Start::Canonical if !self.options.sampled_start => None,
             Start::Canonical => {
                 let correction = self.samples.correction(c, &mut Sampler { rig: self, ws });
-                corrected = correction
-                    .map(|d| shifted(self.world_prediction(&lin, rotated.as_deref()), &d, 1.0));
+                corrected =
+                    correction.map(|d| shifted(self.world_prediction(lin, rotated), &d, 1.0));
                 corrected.as_deref()
             }
         };
@@ -69,54 +57,46 @@ impl Rig {
                 "the start positions must have one point per vertex".into(),
             ));
         }
-        let n = self.shapes.num_vertices();
-        let dof = &self.system.dof_index;
-        let free = |v: usize| (0..3).all(|a| dof[3 * v + a] != u32::MAX);
-        let held = Held::new(n, targets, free);
-        let mut soft: Vec<PointTarget> = targets.iter().filter(|t| !t.is_hard()).copied().collect();
-        // P(w) in solver coordinates: the tether's targets, and the start when none is given.
-        let guarded = self.guard_weight > 0.0;
-        let predicted = (self.options.tether > 0.0 || start_from.is_none() || guarded)
-            .then(|| self.start(&lin, rotated.as_deref(), None));
-        if let Some(p) = predicted.as_deref().filter(|_| self.options.tether > 0.0) {
-            soft.extend(super::tether::targets(p, free, self.options.tether));
-        }
-        let points = PointTerm {
-            targets: &soft,
-            scale: self.mean_stiffness,
+        let mut x = match (start_from, &frame.predicted) {
+            (None, Some(p)) => p.clone(),
+            _ => self.start(lin, rotated, start_from),
         };
-        let mut terms: Vec<&dyn EnergyTerm> = self.terms.iter().map(|t| t.as_ref()).collect();
-        let mut params: Vec<TermParameters> = self.terms.iter().map(|t| t.prepare(c)).collect();
-        if !soft.is_empty() {
-            terms.push(&points);
-            params.push(TermParameters::default());
-        }
-        let guard = predicted.as_deref().filter(|_| guarded).map(|p| {
-            let world = rotated.as_deref().unwrap_or(&lin);
-            OrientationTerm::new(self.shapes.triangles(), p, world, &lin, self.guard_weight)
-        });
-        if let Some(g) = &guard {
-            terms.push(g);
-            params.push(TermParameters::default());
-        }
-        let mut x = match (start_from, predicted) {
-            (None, Some(p)) => p,
-            _ => self.start(&lin, rotated.as_deref(), start_from),
-        };
-        let mut stats = FrameStats {
+        let stats = FrameStats {
             gradient_tolerance: self.tolerance,
-            clamped_springs: params.iter().map(|p| p.clamped).sum(),
+            clamped_springs: frame.clamped(),
             ..Default::default()
         };
-        held.place(&mut x);
-        let prob = Problem {
-            terms: &terms,
-            params: &params,
-            system: &self.system,
-            held: &held,
-            options: &self.options,
-            tolerance: self.tolerance,
-        };
+        frame.held.place(&mut x);
+        frame
+            .with_terms(|terms, params| {
+                let prob = Problem {
+                    terms,
+                    params,
+                    system: &self.system,
+                    held: &frame.held,
+                    options: &self.options,
+                    tolerance: self.tolerance,
+                };
+                self.iterate(ws, &prob, c, factor, x, stats, lin)
+            })
+            .map(|mut r| {
+                r.stats.seconds = start.elapsed().as_secs_f64();
+                r
+            })
+    }
+
+    /// The Newton iteration of one frame from `x`, with the reference factor nearest `c`.
+    #[allow(clippy::too_many_arguments)]
+    fn iterate(
+        &self,
+        ws: &mut Workspace,
+        prob: &Problem<'_>,
+        c: &[f64],
+        factor: Factor<'_>,
+        mut x: Vec<f64>,
+        mut stats: FrameStats,
+        lin: &[Point],
+    ) -> Result<BlendResult, BlendError> {
         let reference = match factor {
             _ if self.options.linear_solver != LinearSolver::TrustRegion => None,
             Factor::Reference => self.reference(ws, c, true),
@@ -127,20 +107,19 @@ impl Rig {
         let g = match self.options.linear_solver {
             LinearSolver::TrustRegion => {
                 let probe = matches!(factor, Factor::Probe);
-                trust_region(&prob, ws, &mut x, &mut stats, reference.as_deref(), probe)?
+                trust_region(prob, ws, &mut x, &mut stats, reference.as_deref(), probe)?
             }
-            LinearSolver::Direct => projected_newton(&prob, ws, &mut x, &mut stats)?,
+            LinearSolver::Direct => projected_newton(prob, ws, &mut x, &mut stats)?,
         };
         if let Factor::Produce(out) = factor {
             if stats.converged {
-                *out = reference_at(&prob, ws, &x)?;
+                *out = reference_at(prob, ws, &x)?;
             }
         }
         if !stats.converged {
             stats.unconverged_vertices = prob.failed_vertices(&g);
         }
-        let positions = predictor::output(&self.constraints, &x, &lin);
-        stats.seconds = start.elapsed().as_secs_f64();
+        let positions = predictor::output(&self.constraints, &x, lin);
         Ok(BlendResult { positions, stats })
     }
 
