@@ -3,6 +3,7 @@
 //! or many in parallel.
 
 use super::frame_solver::{report_lost, FrameSolver};
+use super::interactive::{snapshot_coefficients, InteractiveSpace, CHECKS};
 use super::newton::Workspace;
 use super::options::{BlendOptions, BlendResult, RigSummary};
 use super::predictor::BlendPredictor;
@@ -21,6 +22,8 @@ use std::sync::Arc;
 pub struct PhysicalBlend {
     pub(super) rig: Arc<Rig>,
     pub(super) ws: Workspace,
+    /// The interactive mode's space, once prepared.
+    pub(super) interactive: Option<InteractiveSpace>,
 }
 
 impl std::fmt::Debug for PhysicalBlend {
@@ -50,6 +53,7 @@ impl PhysicalBlend {
                 Ok(Self {
                     rig: Arc::new(rig),
                     ws,
+                    interactive: None,
                 })
             }
             Built::Estimate(_) => Err(BlendError::InvalidOption(
@@ -258,5 +262,90 @@ impl PhysicalBlend {
     /// fields are solved once per blend, on first need).
     pub fn start_samples_solved(&self) -> usize {
         self.rig.samples.solved()
+    }
+}
+
+impl PhysicalBlend {
+    /// Prepares the [interactive mode](super::interactive): the canonical solves at the
+    /// snapshot weights, spread over up to `threads` threads (the space, hence every
+    /// interactive shape, does not depend on the thread count). Done once; later calls return
+    /// the prepared space.
+    pub fn prepare_interactive(&mut self, threads: usize) -> &InteractiveSpace {
+        if self.interactive.is_none() {
+            let started = std::time::Instant::now();
+            let coefficients = snapshot_coefficients(self.rig.shapes.len());
+            let solved = self.map_frames(&coefficients, threads, |f, c| f.rig.snapshot(f.ws, c));
+            let mut snapshots = Vec::with_capacity(solved.len());
+            let mut unconverged = 0;
+            for s in solved {
+                match s {
+                    Some(Some(s)) => snapshots.push(s),
+                    _ => unconverged += 1,
+                }
+            }
+            let diagonal = crate::mesh::bbox_diagonal(self.rig.shapes.positions(0));
+            let targets = self.rig.shapes.len() - 1;
+            let mut space = InteractiveSpace {
+                snapshots,
+                checked: vec![0.0; targets],
+                unconverged,
+                diagonal,
+                prepare_seconds: 0.0,
+            };
+            // The error estimate's data: each combination left out, each target checked
+            // between its snapshots.
+            let indices: Vec<usize> = (0..space.len()).collect();
+            let errors = self.map_frames(&indices, threads, |f, &k| {
+                match space.snapshots[k].active.len() {
+                    1 => 0.0,
+                    _ => f
+                        .rig
+                        .interactive_error(f.ws, &space, &space.snapshots[k], Some(k)),
+                }
+            });
+            for (s, e) in space.snapshots.iter_mut().zip(errors) {
+                s.left_out = e.unwrap_or(f64::INFINITY);
+            }
+            let checks: Vec<(usize, f64)> = (1..=targets)
+                .flat_map(|s| CHECKS.iter().map(move |&a| (s, a)))
+                .collect();
+            let n = self.rig.shapes.len();
+            let errors = self.map_frames(&checks, threads, |f, &(s, a)| {
+                let mut c = vec![0.0; n];
+                c[0] = 1.0 - a;
+                c[s] = a;
+                match f.rig.snapshot(f.ws, &c) {
+                    Some(truth) => f.rig.interactive_error(f.ws, &space, &truth, None),
+                    None => f64::INFINITY,
+                }
+            });
+            for (&(s, _), e) in checks.iter().zip(errors) {
+                let e = e.unwrap_or(f64::INFINITY);
+                space.checked[s - 1] = space.checked[s - 1].max(e);
+            }
+            space.prepare_seconds = started.elapsed().as_secs_f64();
+            self.interactive = Some(space);
+        }
+        self.interactive.as_ref().expect("prepared above")
+    }
+
+    /// The interactive space, where prepared.
+    pub fn interactive_space(&self) -> Option<&InteractiveSpace> {
+        self.interactive.as_ref()
+    }
+
+    /// The interactive shape for `weights` (see [`interactive`](super::interactive)),
+    /// preparing the space on one thread first where it is not prepared.
+    /// `refine` projected-Newton steps with the frame's own factorization follow (each one
+    /// costs about a full solve's Newton iteration and brings the shape closer).
+    pub fn solve_interactive(
+        &mut self,
+        weights: &Weights,
+        refine: usize,
+    ) -> Result<BlendResult, BlendError> {
+        let c = weights.coefficients(self.rig.shapes.len())?;
+        self.prepare_interactive(1);
+        let space = self.interactive.as_ref().expect("prepared above");
+        self.rig.solve_interactive(&mut self.ws, space, &c, refine)
     }
 }

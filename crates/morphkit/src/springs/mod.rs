@@ -99,6 +99,7 @@ mod frame;
 mod frame_solver;
 mod gauge;
 mod holds;
+pub mod interactive;
 pub mod interior;
 mod memory;
 pub mod metrics;
@@ -124,6 +125,7 @@ pub use constraints::{
 pub use continuity::{sequence_continuity, Continuity, ContinuityCheck, Jump, JUMP_BOUND};
 pub(crate) use frame_solver::report_lost;
 pub use frame_solver::FrameSolver;
+pub use interactive::InteractiveSpace;
 pub use interior::{
     AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions, SurfacePredictor,
     VolumetricBlend,

@@ -319,6 +319,10 @@ pub struct FrameStats {
     /// Whether the inner iterations started on a shared
     /// [reference factor](super::reference) (and, with no factorizations, ended on it).
     pub reference_factor: bool,
+    /// The interactive mode's estimate of its distance from the equilibrium, as a fraction
+    /// of the base's bounding-box diagonal (the largest vertex move of one more
+    /// preconditioned step); `None` for full solves.
+    pub error_estimate: Option<f64>,
     /// Wall time in seconds (reported only; no decision depends on it).
     pub seconds: f64,
 }

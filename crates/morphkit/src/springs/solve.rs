@@ -4,6 +4,7 @@
 //! fields and reference factors — are solves themselves, so they are filled from here
 //! ([`Sampler`], [`Rig::reference`]): the data lives below in the stack, the solving above it.
 
+use super::frame::FrameEnergy;
 use super::newton::{projected_newton, reference_at, trust_region, Problem, Workspace};
 use super::options::{BlendResult, FrameStats, LinearSolver};
 use super::predictor;
@@ -36,9 +37,55 @@ impl Rig {
         from: Start<'_>,
         factor: Factor<'_>,
     ) -> Result<BlendResult, BlendError> {
+        Ok(self.solve_state(ws, c, targets, from, factor)?.0)
+    }
+
+    /// [`solve`](Self::solve), also giving the final iterate in solver coordinates (`3 #V`).
+    pub(super) fn solve_state(
+        &self,
+        ws: &mut Workspace,
+        c: &[f64],
+        targets: &[PointTarget],
+        from: Start<'_>,
+        factor: Factor<'_>,
+    ) -> Result<(BlendResult, Vec<f64>), BlendError> {
         let start = Instant::now();
         self.check_targets(targets)?;
         let frame = self.frame_energy(c, targets, !matches!(from, Start::From(_)), false);
+        let x = self.start_of(ws, c, from, &frame)?;
+        let stats = FrameStats {
+            gradient_tolerance: self.tolerance,
+            clamped_springs: frame.clamped(),
+            ..Default::default()
+        };
+        frame
+            .with_terms(|terms, params| {
+                let prob = Problem {
+                    terms,
+                    params,
+                    system: &self.system,
+                    held: &frame.held,
+                    options: &self.options,
+                    tolerance: self.tolerance,
+                };
+                self.iterate(ws, &prob, c, factor, x, stats, &frame.lin)
+            })
+            .map(|(mut r, x)| {
+                r.stats.seconds = start.elapsed().as_secs_f64();
+                (r, x)
+            })
+    }
+
+    /// Where the frame with coefficients `c` and energy `frame` starts from `from`, in solver
+    /// coordinates with its held vertices placed (the canonical start is the predictor plus
+    /// the sampled correction).
+    pub(super) fn start_of(
+        &self,
+        ws: &mut Workspace,
+        c: &[f64],
+        from: Start<'_>,
+        frame: &FrameEnergy<'_>,
+    ) -> Result<Vec<f64>, BlendError> {
         let (lin, rotated) = (&frame.lin, frame.rotated.as_deref());
         let corrected;
         let start_from = match from {
@@ -61,28 +108,8 @@ impl Rig {
             (None, Some(p)) => p.clone(),
             _ => self.start(lin, rotated, start_from),
         };
-        let stats = FrameStats {
-            gradient_tolerance: self.tolerance,
-            clamped_springs: frame.clamped(),
-            ..Default::default()
-        };
         frame.held.place(&mut x);
-        frame
-            .with_terms(|terms, params| {
-                let prob = Problem {
-                    terms,
-                    params,
-                    system: &self.system,
-                    held: &frame.held,
-                    options: &self.options,
-                    tolerance: self.tolerance,
-                };
-                self.iterate(ws, &prob, c, factor, x, stats, lin)
-            })
-            .map(|mut r| {
-                r.stats.seconds = start.elapsed().as_secs_f64();
-                r
-            })
+        Ok(x)
     }
 
     /// The Newton iteration of one frame from `x`, with the reference factor nearest `c`.
@@ -96,7 +123,7 @@ impl Rig {
         mut x: Vec<f64>,
         mut stats: FrameStats,
         lin: &[Point],
-    ) -> Result<BlendResult, BlendError> {
+    ) -> Result<(BlendResult, Vec<f64>), BlendError> {
         let reference = match factor {
             _ if self.options.linear_solver != LinearSolver::TrustRegion => None,
             Factor::Reference => self.reference(ws, c, true),
@@ -120,7 +147,7 @@ impl Rig {
             stats.unconverged_vertices = prob.failed_vertices(&g);
         }
         let positions = predictor::output(&self.constraints, &x, lin);
-        Ok(BlendResult { positions, stats })
+        Ok((BlendResult { positions, stats }, x))
     }
 
     /// The reference nearest to coefficients `c` (see [`reference`](super::reference)),

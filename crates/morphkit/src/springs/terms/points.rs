@@ -136,6 +136,11 @@ impl Held {
         self.targets.is_empty()
     }
 
+    /// The held vertices.
+    pub fn vertices(&self) -> impl Iterator<Item = usize> + '_ {
+        self.targets.iter().map(|t| t.0)
+    }
+
     /// Puts the held vertices of `x` (`3 #V`) at their targets.
     pub fn place(&self, x: &mut [f64]) {
         for (v, p) in &self.targets {

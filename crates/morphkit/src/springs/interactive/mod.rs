@@ -1,0 +1,167 @@
+//! The interactive mode (issue 38): a space of the rig's own equilibria, prepared once, in
+//! which a slider change is a small nonlinear solve.
+//!
+//! **Preparation** ([`PhysicalBlend::prepare_interactive`](super::PhysicalBlend::prepare_interactive)).
+//! Canonical solves at *snapshot* weights ([`snapshot_coefficients`]): every target at
+//! ¼, ½, ¾ (the sampled start's own samples) and every pair of targets at (½, ½) and
+//! (0.3, 0.3). Each gives a correction $d_j = x^*(c_j) - P(c_j)$ over the free coordinates,
+//! with the set of targets it involves.
+//!
+//! **A slider change** ([`Rig::solve_interactive`]). With the frame's energy $E$ exactly as in
+//! the full solve ([`super::frame`]) and its canonical start $x_0$ (the predictor plus the
+//! sampled correction), the shape is $x(y) = x_0 + D_A T y$: $D_A$ holds the corrections of
+//! the snapshots whose targets are all active in this frame (a frame depends only on its
+//! nonzero weights, so the others do not belong), $T$ makes them orthonormal
+//! (eigenvectors of their Gram matrix, directions under $10^{-10}$ of the largest dropped).
+//! $y$ minimises $E$ by a quasi-Newton iteration: the first matrix is the projected Hessian
+//! at $x_0$ reduced to the space, then BFGS updates, with an Armijo line search. Held
+//! vertices stay at their holds. The cost per iteration is one full gradient and a few
+//! products with $D_A$ (a few dozen columns), never a factorization.
+
+mod solve;
+
+use super::newton::Workspace;
+use super::reference::Factor;
+use super::rig::Rig;
+use super::solve::Start;
+
+/// One snapshot: a canonical equilibrium's correction to the predictor.
+pub(super) struct Snapshot {
+    /// Its shape coefficients.
+    pub c: Vec<f64>,
+    /// Targets with a nonzero coefficient (sorted shape indices, ≥ 1).
+    pub active: Vec<usize>,
+    /// $x^* - P$ over the free coordinates (`nf`).
+    pub d: Vec<f64>,
+    /// The interactive shape's distance from this equilibrium when the snapshot itself is
+    /// left out of the space (fraction of the diagonal; the error estimate's data).
+    pub left_out: f64,
+}
+
+/// The single-target weights at which the preparation checks the space (between the
+/// snapshots' ¼, ½, ¾): the error estimate of a frame with that target active.
+pub(super) const CHECKS: [f64; 4] = [0.125, 0.375, 0.625, 0.875];
+
+/// A rig's prepared interactive space (see the [module docs](self)).
+pub struct InteractiveSpace {
+    pub(super) snapshots: Vec<Snapshot>,
+    /// Per target (index `s - 1`): the largest error of the interactive shape against the
+    /// full solve at the [`CHECKS`] weights (fraction of the diagonal).
+    pub(super) checked: Vec<f64>,
+    /// Snapshot solves that did not converge (left out of the space).
+    pub unconverged: usize,
+    /// The base shape's bounding-box diagonal.
+    pub diagonal: f64,
+    /// Seconds the preparation took (reported only).
+    pub prepare_seconds: f64,
+}
+
+/// The snapshot coefficient vectors of an `n`-shape rig: every target at ¼, ½, ¾, every pair
+/// at (½, ½) and (0.3, 0.3); the base takes the rest.
+pub(super) fn snapshot_coefficients(n: usize) -> Vec<Vec<f64>> {
+    let coeffs = |pairs: &[(usize, f64)]| {
+        let mut c = vec![0.0; n];
+        c[0] = 1.0 - pairs.iter().map(|p| p.1).sum::<f64>();
+        for &(s, a) in pairs {
+            c[s] = a;
+        }
+        c
+    };
+    let mut out = Vec::new();
+    for s in 1..n {
+        for a in [0.25, 0.5, 0.75] {
+            out.push(coeffs(&[(s, a)]));
+        }
+    }
+    for s in 1..n {
+        for t in s + 1..n {
+            out.push(coeffs(&[(s, 0.5), (t, 0.5)]));
+            out.push(coeffs(&[(s, 0.3), (t, 0.3)]));
+        }
+    }
+    out
+}
+
+impl InteractiveSpace {
+    /// Number of snapshots.
+    pub fn len(&self) -> usize {
+        self.snapshots.len()
+    }
+
+    /// Whether there is no snapshot.
+    pub fn is_empty(&self) -> bool {
+        self.snapshots.is_empty()
+    }
+
+    /// The snapshots whose targets are all active in coefficients `c`, but `exclude`.
+    fn columns(&self, c: &[f64], exclude: Option<usize>) -> Vec<usize> {
+        (0..self.snapshots.len())
+            .filter(|&k| Some(k) != exclude)
+            .filter(|&k| self.snapshots[k].active.iter().all(|&s| c[s] != 0.0))
+            .collect()
+    }
+
+    /// The error estimate of a frame with coefficients `c` whose space is snapshots `cols`:
+    /// the largest checked error of its active targets and leave-one-out error of its
+    /// combinations (`None` without snapshots).
+    fn estimate(&self, c: &[f64], cols: &[usize]) -> Option<f64> {
+        if cols.is_empty() {
+            return None;
+        }
+        let combos = cols
+            .iter()
+            .filter(|&&k| self.snapshots[k].active.len() > 1)
+            .map(|&k| self.snapshots[k].left_out);
+        let singles = (1..c.len())
+            .filter(|&s| c[s] != 0.0)
+            .map(|s| self.checked.get(s - 1).copied().unwrap_or(f64::INFINITY));
+        combos.chain(singles).reduce(f64::max)
+    }
+}
+
+impl Rig {
+    /// The snapshot at coefficients `c`: its canonical solve, or `None` where it did not
+    /// converge.
+    pub(super) fn snapshot(&self, ws: &mut Workspace, c: &[f64]) -> Option<Snapshot> {
+        let (r, x) = self
+            .solve_state(ws, c, &[], Start::Canonical, Factor::Fresh)
+            .ok()?;
+        if !r.stats.converged {
+            return None;
+        }
+        let p = self.frame_energy(c, &[], true, true).predicted?;
+        let diff: Vec<f64> = x.iter().zip(&p).map(|(a, b)| a - b).collect();
+        let mut d = vec![0.0; self.system.num_free()];
+        self.system.gather(&diff, &mut d);
+        let active = (1..c.len()).filter(|&s| c[s] != 0.0).collect();
+        Some(Snapshot {
+            c: c.to_vec(),
+            active,
+            d,
+            left_out: 0.0,
+        })
+    }
+
+    /// The interactive shape's distance from the equilibrium `truth` (a snapshot's data),
+    /// with snapshot `exclude` left out of the space (fraction of the diagonal; infinite
+    /// where a solve fails).
+    pub(super) fn interactive_error(
+        &self,
+        ws: &mut Workspace,
+        space: &InteractiveSpace,
+        truth: &Snapshot,
+        exclude: Option<usize>,
+    ) -> f64 {
+        let Ok((_, x)) = self.interactive_state(ws, space, &truth.c, 0, exclude) else {
+            return f64::INFINITY;
+        };
+        let Some(p) = self.frame_energy(&truth.c, &[], true, true).predicted else {
+            return f64::INFINITY;
+        };
+        let diff: Vec<f64> = x.iter().zip(&p).map(|(a, b)| a - b).collect();
+        let mut d = vec![0.0; self.system.num_free()];
+        self.system.gather(&diff, &mut d);
+        d.iter_mut().zip(&truth.d).for_each(|(a, b)| *a -= b);
+        solve::max_vertex(&self.system, &d) / space.diagonal
+    }
+}

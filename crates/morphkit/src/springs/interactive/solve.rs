@@ -1,0 +1,317 @@
+//! One interactive solve: the reduced quasi-Newton iteration in the active snapshots' span,
+//! optional projected-Newton refinement steps, and the error estimate (see the
+//! [module docs](super)).
+
+use super::InteractiveSpace;
+use crate::springs::newton::Workspace;
+use crate::springs::options::{BlendResult, FrameStats};
+use crate::springs::predictor;
+use crate::springs::rig::Rig;
+use crate::springs::solve::Start;
+use crate::springs::system::FreeSystem;
+use crate::springs::terms::{
+    total_energy, total_gradient, EnergyTerm, Held, HessianKind, TermParameters,
+};
+use crate::springs::BlendError;
+use nalgebra::{DMatrix, DVector};
+use std::time::Instant;
+
+/// Most quasi-Newton iterations of one interactive solve.
+pub const MAX_ITERATIONS: usize = 20;
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Columns $D$ (free coordinates, zero on held ones), their Gram matrix, the projected
+/// Hessian at the start reduced to them, and `T` with $D T$ orthonormal.
+struct Subspace {
+    columns: Vec<Vec<f64>>,
+    gram: DMatrix<f64>,
+    hessian: DMatrix<f64>,
+    t: DMatrix<f64>,
+}
+
+impl Subspace {
+    fn reduce(&self, gf: &[f64]) -> DVector<f64> {
+        let raw =
+            DVector::from_iterator(self.columns.len(), self.columns.iter().map(|d| dot(d, gf)));
+        self.t.tr_mul(&raw)
+    }
+
+    fn expand(&self, y: &DVector<f64>, out: &mut [f64]) {
+        let raw = &self.t * y;
+        out.iter_mut().for_each(|v| *v = 0.0);
+        for (d, &w) in self.columns.iter().zip(raw.iter()) {
+            out.iter_mut().zip(d).for_each(|(o, d)| *o += w * d);
+        }
+    }
+
+    /// The reduced matrix $T^\top D^\top H D\, T$ (symmetrized).
+    fn matrix(&self) -> DMatrix<f64> {
+        let k = self.t.transpose() * &self.hessian * &self.t;
+        (&k + k.transpose()) * 0.5
+    }
+
+    /// Adds column `z` with `hz` $= H z$.
+    fn push(&mut self, z: Vec<f64>, hz: &[f64]) {
+        let mut g: Vec<f64> = self.columns.iter().map(|d| dot(d, &z)).collect();
+        g.push(dot(&z, &z));
+        let mut h: Vec<f64> = self.columns.iter().map(|d| dot(d, hz)).collect();
+        h.push(dot(&z, hz));
+        self.gram = grow(&self.gram, &g);
+        self.hessian = grow(&self.hessian, &h);
+        self.columns.push(z);
+        self.t = orthonormalizer(&self.gram);
+    }
+}
+
+/// `T` (`m × r`) such that $D T$ is orthonormal, for columns $D$ with Gram matrix `g`
+/// (eigenvectors, directions under $10^{-10}$ of the largest eigenvalue dropped).
+fn orthonormalizer(g: &DMatrix<f64>) -> DMatrix<f64> {
+    let m = g.nrows();
+    let eig = g.clone().symmetric_eigen();
+    let top = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
+    let mut keep: Vec<usize> = (0..m)
+        .filter(|&k| eig.eigenvalues[k] > 1e-10 * top)
+        .collect();
+    // A fixed order (eigenvalues descending, ties by index): a function of the inputs.
+    keep.sort_by(|&a, &b| {
+        eig.eigenvalues[b]
+            .total_cmp(&eig.eigenvalues[a])
+            .then(a.cmp(&b))
+    });
+    DMatrix::from_fn(m, keep.len(), |i, j| {
+        eig.eigenvectors[(i, keep[j])] / eig.eigenvalues[keep[j]].sqrt()
+    })
+}
+
+/// `m` grown to `(n+1) × (n+1)` with last row and column `v`.
+fn grow(m: &DMatrix<f64>, v: &[f64]) -> DMatrix<f64> {
+    let n = m.nrows();
+    DMatrix::from_fn(n + 1, n + 1, |i, j| match (i < n, j < n) {
+        (true, true) => m[(i, j)],
+        (false, _) => v[j],
+        (true, false) => v[i],
+    })
+}
+
+/// Largest per-vertex length of a free-coordinate vector.
+pub(super) fn max_vertex(system: &FreeSystem, z: &[f64]) -> f64 {
+    let dof = &system.dof_index;
+    (0..dof.len() / 3)
+        .map(|v| {
+            (0..3)
+                .filter_map(|a| {
+                    let i = dof[3 * v + a];
+                    (i != u32::MAX).then(|| z[i as usize].powi(2))
+                })
+                .sum::<f64>()
+                .sqrt()
+        })
+        .fold(0.0, f64::max)
+}
+
+impl Rig {
+    /// The interactive shape for coefficients `c` after `refine` projected-Newton steps (see
+    /// the [module docs](super)). Its statistics count quasi-Newton iterations as Newton
+    /// iterations and carry the error estimate; `converged` says whether the full gradient
+    /// reached the tolerance, which a reduced space rarely allows.
+    pub(in crate::springs) fn solve_interactive(
+        &self,
+        ws: &mut Workspace,
+        space: &InteractiveSpace,
+        c: &[f64],
+        refine: usize,
+    ) -> Result<BlendResult, BlendError> {
+        Ok(self.interactive_state(ws, space, c, refine, None)?.0)
+    }
+
+    /// [`solve_interactive`](Self::solve_interactive) with snapshot `exclude` left out of
+    /// the space, also giving the final iterate in solver coordinates (`3 #V`).
+    pub(super) fn interactive_state(
+        &self,
+        ws: &mut Workspace,
+        space: &InteractiveSpace,
+        c: &[f64],
+        refine: usize,
+        exclude: Option<usize>,
+    ) -> Result<(BlendResult, Vec<f64>), BlendError> {
+        let started = Instant::now();
+        let frame = self.frame_energy(c, &[], true, false);
+        let mut x = self.start_of(ws, c, Start::Canonical, &frame)?;
+        let cols = space.columns(c, exclude);
+        let mut stats = FrameStats {
+            gradient_tolerance: self.tolerance,
+            clamped_springs: frame.clamped(),
+            error_estimate: space.estimate(c, &cols),
+            ..Default::default()
+        };
+        let system = &self.system;
+        let nf = system.num_free();
+        frame.with_terms(|terms, params| {
+            let gradient = |x: &[f64], g: &mut [f64], gf: &mut [f64]| {
+                let e = total_gradient(terms, params, x, g);
+                frame.held.mask_gradient(g);
+                system.gather(g, gf);
+                e
+            };
+            let mut g = vec![0.0; x.len()];
+            let mut gf = vec![0.0; nf];
+            let mut e = gradient(&x, &mut g, &mut gf);
+            let norm = |gf: &[f64]| gf.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            stats.gradient_norm = norm(&gf);
+            stats.energy = e;
+            if stats.gradient_norm <= self.tolerance {
+                return;
+            }
+            let mut held_free = Vec::new();
+            for v in frame.held.vertices() {
+                for a in 0..3 {
+                    let i = system.dof_index[3 * v + a];
+                    if i != u32::MAX {
+                        held_free.push(i as usize);
+                    }
+                }
+            }
+            let mut trial = x.clone();
+            if !cols.is_empty() {
+                // The projected Hessian at the start: the first quasi-Newton matrix.
+                self.projected_hessian(ws, terms, params, &frame.held, &x);
+                let mut hd = vec![0.0; nf];
+                let mut sub = Subspace {
+                    columns: Vec::new(),
+                    gram: DMatrix::zeros(0, 0),
+                    hessian: DMatrix::zeros(0, 0),
+                    t: DMatrix::zeros(0, 0),
+                };
+                for &k in &cols {
+                    // Held coordinates do not move.
+                    let mut d = space.snapshots[k].d.clone();
+                    held_free.iter().for_each(|&i| d[i] = 0.0);
+                    system.mul(&ws.projected, &d, &mut hd);
+                    sub.push(d, &hd);
+                }
+                let mut step = vec![0.0; nf];
+                let mut b = sub.matrix();
+                let mut gr = sub.reduce(&gf);
+                while stats.newton_iterations < MAX_ITERATIONS && sub.t.ncols() > 0 {
+                    let Some(chol) = b.clone().cholesky() else {
+                        break;
+                    };
+                    let dy = -chol.solve(&gr);
+                    let slope = gr.dot(&dy);
+                    if slope >= 0.0 {
+                        break;
+                    }
+                    sub.expand(&dy, &mut step);
+                    stats.newton_iterations += 1;
+                    let Some(a) = line_search(|a| {
+                        trial.copy_from_slice(&x);
+                        system.add_step(&mut trial, a, &step);
+                        total_energy(terms, params, &trial) <= e + 1e-4 * a * slope
+                    }) else {
+                        break;
+                    };
+                    stats.rejected_steps += a.1;
+                    let a = a.0;
+                    x.copy_from_slice(&trial);
+                    let e_new = gradient(&x, &mut g, &mut gf);
+                    let gn = sub.reduce(&gf);
+                    let s = &dy * a;
+                    let yv = &gn - &gr;
+                    let sy = s.dot(&yv);
+                    if sy > 1e-12 * s.norm() * yv.norm() {
+                        let bs = &b * &s;
+                        b += &yv * yv.transpose() / sy - &bs * bs.transpose() / s.dot(&bs);
+                    }
+                    gr = gn;
+                    let decrease = e - e_new;
+                    e = e_new;
+                    // Done when a step moves no vertex by more than 10⁻⁹ of the diagonal
+                    // or the energy stops decreasing beyond round-off.
+                    let moved = step.iter().fold(0.0f64, |m, v| m.max(v.abs())) * a;
+                    if moved <= 1e-9 * space.diagonal || decrease <= 1e-13 * e.abs() {
+                        break;
+                    }
+                }
+            }
+            for _ in 0..refine {
+                // A projected-Newton step with this frame's own factor: its length is the
+                // estimate of the distance left before it.
+                self.projected_hessian(ws, terms, params, &frame.held, &x);
+                let values = ws.projected.clone();
+                stats.factorizations += 1;
+                let mut z = gf.clone();
+                if ws.factor().factorize(&values).is_err() || ws.factor().solve_one(&mut z).is_err()
+                {
+                    break;
+                }
+                z.iter_mut().for_each(|v| *v = -*v);
+                held_free.iter().for_each(|&i| z[i] = 0.0);
+                let slope = dot(&gf, &z);
+                let Some((a, rejected)) = line_search(|a| {
+                    trial.copy_from_slice(&x);
+                    system.add_step(&mut trial, a, &z);
+                    total_energy(terms, params, &trial) <= e + 1e-4 * a * slope
+                }) else {
+                    break;
+                };
+                stats.rejected_steps += rejected;
+                stats.newton_iterations += 1;
+                stats.error_estimate = Some(a * max_vertex(system, &z) / space.diagonal);
+                x.copy_from_slice(&trial);
+                e = gradient(&x, &mut g, &mut gf);
+            }
+            stats.gradient_norm = norm(&gf);
+            stats.energy = e;
+        });
+        if stats.gradient_norm <= self.tolerance {
+            stats.error_estimate = Some(0.0);
+        }
+        stats.converged = stats.gradient_norm <= self.tolerance;
+        stats.seconds = started.elapsed().as_secs_f64();
+        let positions = predictor::output(&self.constraints, &x, &frame.lin);
+        Ok((BlendResult { positions, stats }, x))
+    }
+
+    /// Assembles the projected Hessian at `x` into `ws.projected`, held vertices decoupled,
+    /// with a shift of 10⁻⁸ of its mean diagonal so that flat regions factorize.
+    fn projected_hessian(
+        &self,
+        ws: &mut Workspace,
+        terms: &[&dyn EnergyTerm],
+        params: &[TermParameters],
+        held: &Held,
+        x: &[f64],
+    ) {
+        ws.blocks.clear();
+        for (term, p) in terms.iter().zip(params) {
+            term.add_hessian(p, x, HessianKind::Projected, &mut ws.blocks);
+        }
+        held.mask_hessian(&mut ws.blocks);
+        let system = &self.system;
+        system.assemble(&ws.blocks, &mut ws.projected);
+        let slots = &system.diag_slots;
+        let mean = slots.iter().map(|&d| ws.projected[d as usize]).sum::<f64>()
+            / slots.len().max(1) as f64;
+        for &d in slots {
+            ws.projected[d as usize] += 1e-8 * mean;
+        }
+    }
+}
+
+/// Backtracking from a full step: the first step fraction `a` (halving down to 10⁻⁸) for
+/// which `accept(a)` holds, with the number of rejected fractions.
+fn line_search(mut accept: impl FnMut(f64) -> bool) -> Option<(f64, usize)> {
+    let mut a = 1.0;
+    let mut rejected = 0;
+    while a >= 1e-8 {
+        if accept(a) {
+            return Some((a, rejected));
+        }
+        rejected += 1;
+        a *= 0.5;
+    }
+    None
+}
