@@ -3,7 +3,7 @@
 //! or many in parallel.
 
 use super::frame_solver::{report_lost, FrameSolver};
-use super::interactive::{snapshot_coefficients, InteractiveSpace, CHECKS};
+use super::interactive::{decode, encode, snapshot_coefficients, InteractiveSpace, CHECKS};
 use super::newton::Workspace;
 use super::options::{BlendOptions, BlendResult, RigSummary};
 use super::predictor::BlendPredictor;
@@ -329,6 +329,59 @@ impl PhysicalBlend {
         self.interactive.as_ref().expect("prepared above")
     }
 
+    /// The prepared interactive space as bytes (see [`interactive`](super::interactive) for
+    /// the layout), to be given to [`load_interactive`](Self::load_interactive) when the
+    /// same rig is opened again; `None` before [`prepare_interactive`](Self::prepare_interactive).
+    pub fn interactive_bytes(&self) -> Option<Vec<u8>> {
+        let space = self.interactive.as_ref()?;
+        let (n, nf) = (self.rig.shapes.len(), self.rig.system.num_free());
+        Some(encode(space, self.rig.cache_key(), n, nf))
+    }
+
+    /// Takes a preparation saved by [`interactive_bytes`](Self::interactive_bytes): the same
+    /// space, so the same interactive shapes bit for bit, without the preparation's solves.
+    /// Refused with [`BlendError::InteractiveCache`] when the bytes are damaged, of another
+    /// format version, or were made for another rig (other shapes, triangles, options or
+    /// energy terms); the blend is then unchanged.
+    pub fn load_interactive(&mut self, bytes: &[u8]) -> Result<&InteractiveSpace, BlendError> {
+        let (n, nf) = (self.rig.shapes.len(), self.rig.system.num_free());
+        let space = decode(bytes, self.rig.cache_key(), n, nf)?;
+        Ok(self.interactive.insert(space))
+    }
+
+    /// [`prepare_interactive`](Self::prepare_interactive) through a cache file: where `path`
+    /// holds a preparation of this very rig (same shapes, triangles, options and terms), it is
+    /// read instead of solved; otherwise (no file, damaged, another rig) the preparation runs
+    /// and replaces it, written atomically. Fails only when the file cannot be written.
+    pub fn prepare_interactive_cached(
+        &mut self,
+        threads: usize,
+        path: &std::path::Path,
+    ) -> Result<InteractiveCacheUse, BlendError> {
+        let replaced = match std::fs::read(path) {
+            Ok(bytes) => match self.load_interactive(&bytes) {
+                Ok(_) => {
+                    return Ok(InteractiveCacheUse {
+                        loaded: true,
+                        replaced: None,
+                    })
+                }
+                Err(e) => Some(e.to_string()),
+            },
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+            Err(e) => Some(format!("unreadable: {e}")),
+        };
+        self.prepare_interactive(threads);
+        let bytes = self.interactive_bytes().expect("prepared above");
+        crate::io::write_atomic(path, &bytes).map_err(|e| BlendError::InteractiveCache {
+            problem: format!("cannot write {}: {e}", path.display()),
+        })?;
+        Ok(InteractiveCacheUse {
+            loaded: false,
+            replaced,
+        })
+    }
+
     /// The interactive space, where prepared.
     pub fn interactive_space(&self) -> Option<&InteractiveSpace> {
         self.interactive.as_ref()
@@ -348,4 +401,13 @@ impl PhysicalBlend {
         let space = self.interactive.as_ref().expect("prepared above");
         self.rig.solve_interactive(&mut self.ws, space, &c, refine)
     }
+}
+
+/// How [`PhysicalBlend::prepare_interactive_cached`] used its file.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct InteractiveCacheUse {
+    /// The preparation was read from the file (no solves).
+    pub loaded: bool,
+    /// Why a file that was there was not used (it was replaced).
+    pub replaced: Option<String>,
 }

@@ -118,7 +118,7 @@ pub mod terms;
 pub mod tether;
 pub mod weights;
 
-pub use blender::{blend, PhysicalBlend};
+pub use blender::{blend, InteractiveCacheUse, PhysicalBlend};
 pub use constraints::{
     stretched_vertices, thin_bands, AlignedComponent, Components, Constraints, FixedVertices, Gauge,
 };
@@ -290,6 +290,13 @@ pub enum BlendError {
     /// The linear system could not be solved.
     #[error("equilibrium solve failed: {0}")]
     Solve(#[from] crate::sparse::SolveError),
+    /// A saved interactive preparation cannot be used for this rig
+    /// ([`PhysicalBlend::load_interactive`]).
+    #[error("interactive preparation: {problem}")]
+    InteractiveCache {
+        /// What is wrong: truncated, another format version, or made for another rig.
+        problem: String,
+    },
     /// The Newton iteration produced a non-finite state.
     #[error("the Newton iteration diverged (non-finite energy) at iteration {iteration}")]
     Diverged {

@@ -18,7 +18,10 @@
 //! vertices stay at their holds. The cost per iteration is one full gradient and a few
 //! products with $D_A$ (a few dozen columns), never a factorization.
 
+mod cache;
 mod solve;
+
+pub(super) use cache::{decode, encode};
 
 use super::newton::Workspace;
 use super::reference::Factor;
@@ -80,6 +83,18 @@ pub(super) fn snapshot_coefficients(n: usize) -> Vec<Vec<f64>> {
         }
     }
     out
+}
+
+impl std::fmt::Debug for InteractiveSpace {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("InteractiveSpace")
+            .field("snapshots", &self.snapshots.len())
+            .field("checked", &self.checked)
+            .field("unconverged", &self.unconverged)
+            .field("diagonal", &self.diagonal)
+            .field("prepare_seconds", &self.prepare_seconds)
+            .finish()
+    }
 }
 
 impl InteractiveSpace {

@@ -266,7 +266,8 @@ impl Rig {
             stats.gradient_norm = norm(&gf);
             stats.energy = e;
         });
-        if stats.gradient_norm <= self.tolerance {
+        // A start that already meets the tolerance is where the full solve stops too.
+        if stats.gradient_norm <= self.tolerance && stats.newton_iterations == 0 {
             stats.error_estimate = Some(0.0);
         }
         stats.converged = stats.gradient_norm <= self.tolerance;
