@@ -99,7 +99,15 @@ class PhysicalBlend:
         pulls: Union[
             None, Mapping[int, Sequence[float]], Sequence[Tuple[int, Sequence[float]]]
         ] = None,
+        interactive: bool = False,  # the prepared space's fast shape; see prepare_interactive
+        refine: int = 0,  # >= 0; projected-Newton steps after an interactive solve
     ) -> Vertices: ...
+    def prepare_interactive(
+        self,
+        *,
+        threads: int = 1,  # >= 1; the result does not depend on it
+        cache: Optional[PathLike] = None,  # read when it holds this rig's preparation, else written
+    ) -> Dict[str, Any]: ...
     def solve_many(
         self,
         weights: Sequence[Union[float, Sequence[float]]],

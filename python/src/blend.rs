@@ -9,16 +9,18 @@
 //! solve runs. `solve_many` solves in chunks and checks for signals between them, so that
 //! Ctrl-C interrupts a long batch (see [`solve_in_chunks`]).
 
-use crate::args::{self, Elements};
-use crate::arrays::{self, to_array, to_array3};
+use crate::args;
+use crate::arrays::{to_array, to_array3};
+use crate::blend_args::pulls as pulls_of;
+pub use crate::blend_args::{fixed_vertices, shape_set, volume_options, weight_rows, weights};
 use crate::dict::to_dict;
 use crate::errors::{chain, new_err, IntoPyResult, Kind};
-use crate::mesh::from_arrays;
+pub use crate::predictor::PyPredictor;
 use crate::weld::{shape_weld, unweld, unweld_stats, weld_fixed};
-use morphkit::mesh::{ShapeSet, Weld};
+use morphkit::mesh::Weld;
 use morphkit::springs::{
-    AnchorOptions, AnchorPlacement, BlendOptions, FixedVertices, FrameStats, InteriorMode,
-    InteriorOptions, PhysicalBlend, PointTarget, SurfacePredictor, VolumetricBlend, Weights,
+    AnchorPlacement, BlendError, BlendOptions, FrameStats, InteractiveCacheUse, InteriorMode,
+    PhysicalBlend, SurfacePredictor, VolumetricBlend, Weights,
 };
 use numpy::{PyArray2, PyArray3};
 use pyo3::exceptions::PyRuntimeError;
@@ -99,165 +101,44 @@ pub(crate) fn solve_in_chunks<T: Sync, R: Send>(
     Ok(out)
 }
 
-/// `fixed` as given to the constructors: `None` or `"auto"`, `"none"`, or vertex ids of a
-/// mesh of `vertices` vertices.
-pub fn fixed_vertices(obj: Option<&Bound<'_, PyAny>>, vertices: usize) -> PyResult<FixedVertices> {
-    let Some(obj) = obj else {
-        return Ok(FixedVertices::Auto);
-    };
-    if let Ok(s) = obj.extract::<String>() {
-        return match s.as_str() {
-            "auto" => Ok(FixedVertices::Auto),
-            "none" => Ok(FixedVertices::None),
-            other => Err(new_err(
-                Kind::Blend,
-                format!("fixed: expected \"auto\", \"none\" or vertex ids, got {other:?}"),
-            )),
-        };
-    }
-    let ids = args::indices("fixed", obj, Kind::Blend, Elements::vertices(vertices))?;
-    Ok(FixedVertices::Ids(ids))
-}
-
-/// The rig of a blend: `base` `(n, 3)` and `targets` `(k, n, 3)` over `faces`, at least one
-/// target; shape 0 is the base.
-pub fn shape_set(
-    base: &Bound<'_, PyAny>,
-    targets: &Bound<'_, PyAny>,
-    faces: &Bound<'_, PyAny>,
-) -> PyResult<ShapeSet> {
-    let mesh = from_arrays("base", base, faces)?;
-    let n = mesh.num_vertices();
-    let targets = arrays::frames("targets", targets, Some(n))?;
-    if targets.is_empty() {
-        return Err(new_err(
-            Kind::Blend,
-            "targets: at least one target is needed",
-        ));
-    }
-    let mut named = vec![("base".to_string(), mesh.positions.clone())];
-    named.extend(
-        targets
-            .into_iter()
-            .enumerate()
-            .map(|(i, p)| (format!("target_{i}"), p)),
-    );
-    ShapeSet::new(mesh, named).py(Kind::Mesh)
-}
-
-/// `interior` and `anchor` as given to the constructors (`None`: none), parsed as the CLI's
-/// `--interior` and `--anchor`.
-pub(crate) fn volume_options(
-    interior: Option<&str>,
-    anchor: Option<&str>,
-) -> PyResult<(InteriorOptions, AnchorOptions)> {
-    let io = match interior {
-        None => InteriorOptions::default(),
-        Some(s) => {
-            InteriorOptions::parse(s).map_err(|e| new_err(Kind::Blend, format!("interior: {e}")))?
-        }
-    };
-    let ao = match anchor {
-        None | Some("none") => AnchorOptions::default(),
-        Some(s) => {
-            AnchorOptions::parse(s).map_err(|e| new_err(Kind::Blend, format!("anchor: {e}")))?
-        }
-    };
-    Ok((io, ao))
-}
-
 /// The surface-only blend, or the blend with internal springs and an anchor (Sec. 3.1, 3.4).
 enum Solver {
     Surface(Box<PhysicalBlend>),
     Volume(Box<VolumetricBlend>),
 }
 
-/// A sequence of weight vectors, each as [`weights`] reads it.
-pub fn weight_rows(obj: &Bound<'_, PyAny>, convex: bool, targets: usize) -> PyResult<Vec<Weights>> {
-    obj.try_iter()
-        .map_err(|_| {
-            new_err(
-                Kind::Blend,
-                "weights: expected a sequence of weight vectors",
-            )
-        })?
-        .map(|row| weights(&row?, convex, targets))
-        .collect()
-}
-
-pub fn weights(obj: &Bound<'_, PyAny>, convex: bool, targets: usize) -> PyResult<Weights> {
-    let w: Vec<f64> = match obj.extract::<f64>() {
-        Ok(a) if !convex && targets == 1 => vec![a],
-        Ok(_) => {
-            return Err(new_err(
-                Kind::Blend,
-                format!(
-                    "weights: a single number needs exactly one target (delta form); \
-                     this blend has {targets}; pass a sequence"
-                ),
-            ))
-        }
-        Err(_) => obj.extract().map_err(|_| {
-            new_err(
-                Kind::Blend,
-                "weights: expected a number or a sequence of numbers",
-            )
-        })?,
-    };
-    Ok(if convex {
-        Weights::Convex(w)
-    } else {
-        Weights::Delta(w)
-    })
-}
-
-fn pulls(obj: Option<&Bound<'_, PyAny>>, vertices: usize) -> PyResult<Vec<PointTarget>> {
-    let Some(obj) = obj else {
-        return Ok(Vec::new());
-    };
-    let items: Vec<(String, Bound<'_, PyAny>, [f64; 3])> =
-        if let Ok(d) = obj.cast::<pyo3::types::PyDict>() {
-            d.iter()
-                .map(|(k, v)| Ok(("pulls vertex".to_string(), k, v.extract()?)))
-                .collect::<PyResult<_>>()
-        } else {
-            obj.extract::<Vec<(Bound<'_, PyAny>, [f64; 3])>>()
-                .map(|items| {
-                    items
-                        .into_iter()
-                        .enumerate()
-                        .map(|(i, (k, v))| (format!("pulls[{i}][0]"), k, v))
-                        .collect()
-                })
-        }
-        .map_err(|_| {
-            new_err(
-                Kind::Blend,
-                "pulls: expected {vertex: (x, y, z)} or a sequence of (vertex, (x, y, z))",
-            )
-        })?;
-    items
-        .into_iter()
-        .map(|(label, v, p)| {
-            let vertex = args::index(&label, &v, Kind::Blend, Elements::vertices(vertices))?;
-            if p.iter().any(|x| !x.is_finite()) {
-                return Err(new_err(
-                    Kind::Blend,
-                    format!("pulls: vertex {vertex} has a non-finite position {p:?}"),
-                ));
-            }
-            Ok(PointTarget {
-                vertex,
-                position: p,
-                stiffness: PointTarget::HARD_STIFFNESS,
-            })
-        })
-        .collect()
-}
-
 /// `s` as a JSON value (what `summary` returns, as a dict).
 fn json<T: serde::Serialize>(s: &T) -> PyResult<serde_json::Value> {
     serde_json::to_value(s).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}
+
+fn not_surface() -> BlendError {
+    BlendError::InvalidOption(
+        "the interactive mode is for surface blends (not with interior or anchor)".into(),
+    )
+}
+
+impl PyPhysicalBlend {
+    fn solve_interactive<'py>(
+        &self,
+        py: Python<'py>,
+        w: &Weights,
+        refine: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let weld = self.weld.as_deref();
+        let positions = py
+            .detach(|| {
+                let mut solver = lock(&self.inner);
+                let Solver::Surface(b) = &mut *solver else {
+                    return Err(not_surface());
+                };
+                let r = b.solve_interactive(w, refine)?;
+                *lock(&self.last) = Some(unweld_stats(weld, r.stats));
+                Ok(unweld(weld, r.positions))
+            })
+            .py(Kind::Blend)?;
+        Ok(to_array(py, &positions))
+    }
 }
 
 #[pymethods]
@@ -397,16 +278,37 @@ impl PyPhysicalBlend {
     /// part must be held by fixed vertices). Statistics of the solve are in
     /// :attr:`last_stats`. The GIL is released while solving; a solve running on another
     /// thread is waited for.
-    #[pyo3(signature = (weights, *, convex=false, pulls=None))]
+    ///
+    /// `interactive=True`: the interactive mode (a slider being dragged): a small solve in the
+    /// rig's prepared space of equilibria (see :meth:`prepare_interactive`; prepared on one
+    /// thread at the first call if not yet), tens of milliseconds instead of the full solve's
+    /// hundreds, within ``last_stats["error_estimate"]`` (a fraction of the base's diagonal)
+    /// of the full solve; one-hot and zero weights give the full solve exactly. `refine`
+    /// projected-Newton steps follow, each costing about one Newton iteration of the full
+    /// solve and bringing the shape closer. Not with `pulls`, and not for volumetric blends.
+    #[pyo3(signature = (weights, *, convex=false, pulls=None, interactive=false, refine=None),
+        text_signature = "($self, weights, *, convex=False, pulls=None, interactive=False, refine=0)")]
     fn solve<'py>(
         &self,
         py: Python<'py>,
         weights: &Bound<'py, PyAny>,
         convex: bool,
         pulls: Option<&Bound<'py, PyAny>>,
+        interactive: bool,
+        refine: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let w = self::weights(weights, convex, self.targets)?;
-        let mut targets = self::pulls(pulls, self.vertices)?;
+        let w = crate::blend_args::weights(weights, convex, self.targets)?;
+        let refine = args::opt_count("refine", refine, Kind::Blend, 0)?.unwrap_or(0);
+        if interactive {
+            if pulls.is_some_and(|p| !p.is_none()) {
+                return Err(new_err(
+                    Kind::Blend,
+                    "pulls are not part of the interactive mode: solve without interactive=True",
+                ));
+            }
+            return self.solve_interactive(py, &w, refine);
+        }
+        let mut targets = pulls_of(pulls, self.vertices)?;
         let weld = self.weld.as_deref();
         if let Some(wd) = weld {
             for t in &mut targets {
@@ -429,6 +331,52 @@ impl PyPhysicalBlend {
             })
             .py(Kind::Blend)?;
         Ok(to_array(py, &positions))
+    }
+
+    /// Prepares the interactive mode of :meth:`solve` once: canonical solves of every target
+    /// at ¼, ½, ¾ and of every pair of targets at (½, ½) and (0.3, 0.3), then checks that give
+    /// the error estimate, on up to `threads` threads (the result does not depend on them).
+    /// With `cache` (a path), a preparation of this very rig saved there is read instead (a
+    /// file of another rig or options is replaced). Returns a dict: ``snapshots``,
+    /// ``unconverged``, ``seconds`` (this call), ``loaded`` (from the cache), ``replaced`` (why
+    /// a cache file there was not used, or None). Only for surface blends.
+    #[pyo3(signature = (*, threads=None, cache=None),
+        text_signature = "($self, *, threads=1, cache=None)")]
+    fn prepare_interactive<'py>(
+        &self,
+        py: Python<'py>,
+        threads: Option<&Bound<'py, PyAny>>,
+        cache: Option<std::path::PathBuf>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let threads = args::opt_count("threads", threads, Kind::Blend, 1)?.unwrap_or(1);
+        let report = py
+            .detach(|| {
+                let started = std::time::Instant::now();
+                let mut solver = lock(&self.inner);
+                let Solver::Surface(b) = &mut *solver else {
+                    return Err(not_surface());
+                };
+                let used = match &cache {
+                    Some(path) => b.prepare_interactive_cached(threads, path)?,
+                    None => {
+                        b.prepare_interactive(threads);
+                        InteractiveCacheUse {
+                            loaded: false,
+                            replaced: None,
+                        }
+                    }
+                };
+                let space = b.interactive_space().expect("prepared above");
+                Ok(serde_json::json!({
+                    "snapshots": space.len(),
+                    "unconverged": space.unconverged,
+                    "seconds": started.elapsed().as_secs_f64(),
+                    "loaded": used.loaded,
+                    "replaced": used.replaced,
+                }))
+            })
+            .py(Kind::Blend)?;
+        to_dict(py, &report)
     }
 
     /// Solves every weight vector of `weights` (a sequence, each as in :meth:`solve`) on up to
@@ -531,62 +479,5 @@ impl PyPhysicalBlend {
             "PhysicalBlend(vertices={}, targets={})",
             self.vertices, self.targets
         )
-    }
-}
-
-/// The predictor P(w) of a physical blend, on its own: the rotation-aware interpolation of the
-/// shapes that every solve starts from (exact at each shape's one-hot weights; fixed vertices
-/// at their linear blend; no pulls, no obstacles). It costs one prefactored solve, so a UI can
-/// show it while a slider moves and replace it by the equilibrium when that is ready. It
-/// shares the blend's set-up and may be called from any thread, also while the blend solves.
-///
-/// >>> preview = blend.predictor()
-/// >>> X = preview.predict([0.5])
-#[pyclass(name = "Predictor", module = "morphkit", frozen)]
-pub struct PyPredictor {
-    inner: SurfacePredictor,
-    targets: usize,
-    /// The weld of the blend it predicts for (`None`: none).
-    weld: Option<Arc<Weld>>,
-}
-
-impl PyPredictor {
-    pub fn new(inner: SurfacePredictor, targets: usize) -> Self {
-        Self {
-            inner,
-            targets,
-            weld: None,
-        }
-    }
-
-    /// Predictions scattered back through `weld` (that of the blend's welded rig).
-    pub fn welded(mut self, weld: Option<Arc<Weld>>) -> Self {
-        self.weld = weld;
-        self
-    }
-}
-
-#[pymethods]
-impl PyPredictor {
-    /// The predicted shape for `weights` (as in :meth:`PhysicalBlend.solve`) as a new `(n, 3)`
-    /// array. The GIL is released.
-    #[pyo3(signature = (weights, *, convex=false))]
-    pub fn predict<'py>(
-        &self,
-        py: Python<'py>,
-        weights: &Bound<'py, PyAny>,
-        convex: bool,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let w = self::weights(weights, convex, self.targets)?;
-        let inner = &self.inner;
-        let weld = self.weld.as_deref();
-        let p = py
-            .detach(|| inner.predict(&w).map(|p| unweld(weld, p)))
-            .py(Kind::Blend)?;
-        Ok(to_array(py, &p))
-    }
-
-    fn __repr__(&self) -> String {
-        format!("Predictor(targets={})", self.targets)
     }
 }

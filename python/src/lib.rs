@@ -6,11 +6,13 @@
 mod args;
 mod arrays;
 mod blend;
+mod blend_args;
 mod dict;
 mod errors;
 mod io;
 mod mesh;
 mod metrics;
+mod predictor;
 mod rig_io;
 mod scene;
 mod synth;

@@ -26,7 +26,7 @@ enum Command {
     /// Run the main job on a built-in example: physical vs. linear blend of a bent bar.
     Demo(cmd::demo::DemoArgs),
     /// Blend shapes by rest-length interpolation of a mass–spring system (Ma et al. 2012).
-    Blend(cmd::blend::BlendArgs),
+    Blend(Box<cmd::blend::BlendArgs>),
     /// Compute a triangle correspondence between two meshes from marker pairs.
     Correspond(cmd::correspond::CorrespondArgs),
     /// Transfer an animation from a source mesh onto a different target mesh.

@@ -13,7 +13,10 @@
 //! Each state is solved in full (the canonical equilibrium, the reference) and predicted
 //! ([`PhysicalBlend::predict`], the preview the add-on shows at once); the rows give the
 //! median and worst latency of both and the preview's distance from the full solve (largest
-//! vertex distance over the bounding-box diagonal). One thread, so the numbers are those of an
+//! vertex distance over the bounding-box diagonal), and the same for the interactive mode
+//! ([`PhysicalBlend::solve_interactive`], prepared once, timed as `prepare_interactive_s`)
+//! without and with one refinement step, with how many states stayed within 1e-3 of the
+//! diagonal and how many exceeded their own error estimate. One thread, so the numbers are those of an
 //! interactive session on one core.
 
 use morphkit::io::read_mesh;
@@ -119,9 +122,15 @@ fn rig_row(name: &str, shapes: &ShapeSet, face: bool, changes: usize) -> anyhow:
     let t = Instant::now();
     blend.prepare(&all, 1);
     let samples_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let space = blend.prepare_interactive(1);
+    let (snapshots, interactive_s) = (space.len(), t.elapsed().as_secs_f64());
     let mut kinds = serde_json::Map::new();
     for kind in ["combination", "single", "one-hot"] {
         let (mut full, mut preview, mut error, mut iterations) = (vec![], vec![], vec![], vec![]);
+        let (mut fast, mut fast_error, mut refined, mut refined_error) =
+            (vec![], vec![], vec![], vec![]);
+        let (mut over_estimate, mut within) = (0, 0);
         let mut unconverged = 0;
         for (w, _) in all.iter().zip(&states).filter(|(_, s)| s.0 == kind) {
             let t = Instant::now();
@@ -133,6 +142,17 @@ fn rig_row(name: &str, shapes: &ShapeSet, face: bool, changes: usize) -> anyhow:
             error.push(max_distance(&p, &r.positions) / diag);
             iterations.push(r.stats.newton_iterations as f64);
             unconverged += usize::from(!r.stats.converged);
+            let t = Instant::now();
+            let f = blend.solve_interactive(w, 0)?;
+            fast.push(t.elapsed().as_secs_f64());
+            let e = max_distance(&f.positions, &r.positions) / diag;
+            fast_error.push(e);
+            over_estimate += usize::from(f.stats.error_estimate.is_none_or(|b| e > b));
+            within += usize::from(e <= 1e-3);
+            let t = Instant::now();
+            let g = blend.solve_interactive(w, 1)?;
+            refined.push(t.elapsed().as_secs_f64());
+            refined_error.push(max_distance(&g.positions, &r.positions) / diag);
         }
         let worst = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
         kinds.insert(
@@ -147,6 +167,16 @@ fn rig_row(name: &str, shapes: &ShapeSet, face: bool, changes: usize) -> anyhow:
                 "preview_worst_s": worst(&preview),
                 "preview_error_median": median(error.clone()),
                 "preview_error_worst": worst(&error),
+                "interactive_median_s": median(fast.clone()),
+                "interactive_worst_s": worst(&fast),
+                "interactive_error_median": median(fast_error.clone()),
+                "interactive_error_worst": worst(&fast_error),
+                "interactive_within_1e-3": within,
+                "interactive_error_over_estimate": over_estimate,
+                "refined_median_s": median(refined.clone()),
+                "refined_worst_s": worst(&refined),
+                "refined_error_median": median(refined_error.clone()),
+                "refined_error_worst": worst(&refined_error),
             }),
         );
     }
@@ -157,6 +187,8 @@ fn rig_row(name: &str, shapes: &ShapeSet, face: bool, changes: usize) -> anyhow:
         "prepare_build_s": build_s,
         "prepare_samples_s": samples_s,
         "sample_solves": blend.start_samples_solved(),
+        "prepare_interactive_s": interactive_s,
+        "interactive_snapshots": snapshots,
         "kinds": kinds,
     });
     println!("{row}");

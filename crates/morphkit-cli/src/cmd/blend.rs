@@ -215,6 +215,20 @@ pub struct BlendArgs {
     /// (default 10; 0 turns it off, springs only as in Ma et al.).
     #[arg(long, default_value = "none")]
     pub interior: String,
+    /// The interactive mode (a slider preview): each frame is a small solve in the rig's
+    /// space of equilibria, prepared once (canonical solves of every target at ¼, ½, ¾ and
+    /// of every pair), within its `error_estimate` in --report (a fraction of the base's
+    /// diagonal) of the full solve; one-hot weights are exact.
+    #[arg(long, conflicts_with_all = ["linear", "anchor"])]
+    pub interactive: bool,
+    /// With --interactive: projected-Newton steps after each reduced solve (each costs about
+    /// one Newton iteration of the full solve and brings the frame closer to it).
+    #[arg(long, default_value_t = 0, requires = "interactive")]
+    pub refine: usize,
+    /// With --interactive: a file keeping the preparation; read when it holds one of this
+    /// very rig (same shapes and options), otherwise written (replaced) after preparing.
+    #[arg(long, requires = "interactive")]
+    pub interactive_cache: Option<PathBuf>,
 }
 
 /// Solves every frame (`None` per frame for the linear blend), in parallel chunks so that the
@@ -223,6 +237,7 @@ fn solve_frames(
     solver: Option<&mut PhysicalBlend>,
     weights: &[Weights],
     threads: usize,
+    interactive: Option<usize>,
     bar: &indicatif::ProgressBar,
 ) -> anyhow::Result<Vec<Option<BlendResult>>> {
     let Some(solver) = solver else {
@@ -231,7 +246,15 @@ fn solve_frames(
     };
     let mut out = Vec::with_capacity(weights.len());
     for (c, chunk) in weights.chunks(4 * threads).enumerate() {
-        for (k, r) in solver.solve_many(chunk, threads).into_iter().enumerate() {
+        let results = match interactive {
+            Some(refine) => super::blend_interactive::solve(solver, chunk, refine),
+            None => solver
+                .solve_many(chunk, threads)
+                .into_iter()
+                .map(|r| r.map_err(anyhow::Error::from))
+                .collect(),
+        };
+        for (k, r) in results.into_iter().enumerate() {
             let frame = c * 4 * threads + k;
             out.push(Some(r.with_context(|| format!("frame {frame}"))?));
         }
@@ -271,6 +294,11 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         .force(a.force)
         .output("--out", &a.out, Kind::MeshOrAnimation)
         .output_opt("--report", a.report.as_ref(), Kind::Json)
+        .output_opt(
+            "--interactive-cache",
+            a.interactive_cache.as_ref(),
+            Kind::Json,
+        )
         .output_sometimes("OUT-unconverged.ply", &unconverged_path(&a.out), Kind::Mesh)
         .output_sometimes("OUT-jumps.ply", &jumps_path(&a.out), Kind::Mesh)
         .check()?;
@@ -354,6 +382,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     if carry && super::volume::requested(a) {
         bail!("--rig with --interior writes frames, not the asset: give a directory or .pc2 --out");
     }
+    if a.interactive && super::volume::requested(a) {
+        bail!("--interactive is for surface blends: leave out --interior");
+    }
     if super::volume::requested(a) {
         return super::volume::run(
             a,
@@ -375,6 +406,10 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         Some(PhysicalBlend::new(&weld.shapes(&shapes)?, &options)?)
     };
     let setup_seconds = t_setup.elapsed().as_secs_f64();
+    let interactive = match solver.as_mut().filter(|_| a.interactive) {
+        Some(s) => Some(super::blend_interactive::prepare(s, a, threads)?),
+        None => None,
+    };
 
     let bar = progress(
         weights.len() as u64,
@@ -402,7 +437,8 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let mut steps = ContinuityCheck::new(JUMP_BOUND, shapes.base().bbox_diagonal());
     let mut write_seconds = 0.0;
     for (c, chunk) in weights.chunks(FRAME_CHUNK).enumerate() {
-        let results = solve_frames(solver.as_mut(), chunk, threads, &bar)
+        let refine = a.interactive.then_some(a.refine);
+        let results = solve_frames(solver.as_mut(), chunk, threads, refine, &bar)
             .with_context(|| format!("frames from {}", c * FRAME_CHUNK))?;
         for (i, (w, r)) in chunk.iter().zip(results).enumerate() {
             let k = c * FRAME_CHUNK + i;
@@ -493,7 +529,8 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     if let Some(r) = &a.report {
         let report = json!({
             "command": "blend",
-            "method": if a.linear { "linear" } else { "physical" },
+            "method": if a.linear { "linear" } else if a.interactive { "interactive" } else { "physical" },
+            "interactive": interactive,
             "inputs": inputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
             "output": a.out.display().to_string(),
             "vertices": shapes.num_vertices(),

@@ -10,6 +10,7 @@ pub mod bench_transfer;
 pub mod bench_volume;
 pub mod blend;
 pub mod blend_inputs;
+pub mod blend_interactive;
 pub mod blend_outputs;
 pub mod blend_rig;
 pub mod convert;
