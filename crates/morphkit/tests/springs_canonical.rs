@@ -299,14 +299,19 @@ fn degenerate_or_too_large_input_is_refused() {
     else {
         panic!("expected the early, count-based refusal: {e}");
     };
-    let ok = PhysicalBlend::new(&s, &BlendOptions::default()).unwrap();
+    // (Without reference factors: those only get what the limit leaves.)
+    let lean = BlendOptions {
+        reference_factor_bytes: 0,
+        ..Default::default()
+    };
+    let ok = PhysicalBlend::new(&s, &lean).unwrap();
     let exact = ok.summary().predicted_bytes;
     assert!(bound <= exact, "lower bound {bound} > estimate {exact}");
     let e = PhysicalBlend::new(
         &s,
         &BlendOptions {
             max_memory_bytes: exact - 1,
-            ..Default::default()
+            ..lean
         },
     )
     .unwrap_err();

@@ -64,6 +64,9 @@ whose CSV header row names targets) drive the blend, and a .glb/.gltf OUT is the
 animation, NAME-physical, keying one new morph target per frame at the keys' times. More frames
 than --max-targets (default 200, what WebGL2 viewers play) is refused before any solve.";
 
+/// Fewest frames for which a blend computes reference factors (fewer never pay them back).
+const REFERENCE_MIN_FRAMES: usize = 4;
+
 /// Most frames one call produces.
 pub(super) const MAX_FRAMES: usize = 100_000;
 
@@ -169,8 +172,8 @@ pub struct BlendArgs {
     /// Factorize every frame's own Hessians instead of preconditioning frames near a
     /// target's equilibria at α = 0, ¼, ½, ¾, 1 with those equilibria's factors, turned by
     /// each vertex's rotation (on by default where a probe frame at α = ⅜ converges on them;
-    /// up to five factors of memory per target, 1 GiB in all). A speed knob; the frames agree
-    /// within the tolerance.
+    /// up to five factors of memory per target, 1 GiB in all; never for fewer than 4 frames,
+    /// which do not pay them back). A speed knob; the frames agree within the tolerance.
     #[arg(long)]
     pub no_reference_factors: bool,
     /// Preconditioner of the Newton steps' inner CG: `cholesky` (a sparse factor), `aggregation`
@@ -362,7 +365,10 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
         refactor_every: a.refactor_every,
         keep_factor_cg: a.keep_factor_cg,
         sampled_start: !a.no_sampled_start,
-        reference_factor_bytes: if a.no_reference_factors {
+        // References cost a probe solve and five factorizations per target, which only a
+        // sequence pays back: a one-frame blend of a 40k-vertex sheet took 25 s with them and
+        // 1.7 s without (docs/performance.md, "Film scale").
+        reference_factor_bytes: if a.no_reference_factors || weights.len() < REFERENCE_MIN_FRAMES {
             0
         } else {
             BlendOptions::default().reference_factor_bytes

@@ -170,7 +170,12 @@ impl AggregationLevels {
                 }
             }
         }
-        let coarse = Cholesky::analyze_with(coarse_pattern, Ordering::Amd, Precision::Double)?;
+        // Symbolic only: each cycle factors in buffers of its own.
+        let coarse = Cholesky::analyze_symbolic_only(
+            Arc::new(coarse_pattern),
+            Ordering::Amd,
+            Precision::Double,
+        )?;
         if row_idx.len() > u32::MAX as usize {
             return Err(SolveError::Backend(
                 "too many matrix entries for the aggregation cycle".into(),
@@ -204,6 +209,33 @@ impl AggregationLevels {
     /// Number of aggregates (coarse unknowns: six per aggregate).
     pub fn num_aggregates(&self) -> usize {
         self.agg_ptr.len() - 1
+    }
+
+    /// Bytes of these levels (shared by every cycle) and of each
+    /// [`AggregationPreconditioner`] over them (its copy of the matrix, the rigid modes, the
+    /// coarse matrix, factor and scratch).
+    pub fn bytes(&self) -> (u64, u64) {
+        let n = self.pattern.n() as u64;
+        let nnz = self.rows.len() as u64;
+        let aggs = self.num_aggregates() as u64;
+        let pairs = self.pair_row.len() as u64;
+        let shared = 8 * (n + 1)
+            + 4 * nnz
+            + 8 * n
+            + 4 * n
+            + 8 * (aggs + 1)
+            + 4 * n
+            + 8 * (aggs + 1)
+            + 4 * pairs
+            + 4 * (MODES * MODES) as u64 * pairs;
+        let coarse = self.coarse.pattern().nnz() as u64;
+        let cycle = 8 * nnz
+            + 8 * MODES as u64 * n
+            + 16 * n
+            + 8 * coarse
+            + 8 * MODES as u64 * aggs
+            + self.coarse.numeric_bytes();
+        (shared, cycle)
     }
 
     /// Multiply-adds of one coarse factorization.

@@ -28,7 +28,9 @@ impl AggregationPreconditioner {
     pub fn new(levels: Arc<AggregationLevels>) -> Result<Self, SolveError> {
         let n = levels.pattern.n();
         let nc = MODES * levels.num_aggregates();
-        let coarse = levels.coarse.share_symbolic()?;
+        let coarse = levels
+            .coarse
+            .share_symbolic_with(super::Precision::Double)?;
         Ok(Self {
             values: vec![0.0; levels.pattern.nnz()],
             basis: vec![[0.0; MODES]; n],

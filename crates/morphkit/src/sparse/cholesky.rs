@@ -66,6 +66,13 @@ impl<T: Copy + Default> Aligned<T> {
             len,
         })
     }
+    fn empty() -> Self {
+        Self {
+            storage: Vec::new(),
+            offset: 0,
+            len: 0,
+        }
+    }
     fn as_slice(&self) -> &[T] {
         &self.storage[self.offset..self.offset + self.len]
     }
@@ -119,6 +126,9 @@ pub struct Cholesky {
     factor_scratch: MemBuffer,
     /// Scratch of single right-hand-side solves ([`Cholesky::solve_one`]).
     solve_scratch: MemBuffer,
+    /// Whether the numeric buffers above exist (`false`: a symbolic analysis only, see
+    /// [`Cholesky::analyze_cheapest_symbolic`]).
+    numeric: bool,
     factored: bool,
 }
 
@@ -170,6 +180,19 @@ impl Cholesky {
         orderings: &[Ordering],
         precision: Precision,
     ) -> Result<(Self, usize), SolveError> {
+        let (symbolic, k) = Self::analyze_cheapest_symbolic(pattern, orderings, precision)?;
+        Ok((symbolic.with_numeric()?, k))
+    }
+
+    /// Like [`analyze_cheapest`](Self::analyze_cheapest), without numeric buffers: the
+    /// analysis's counts ([`Self::factor_nnz`], [`Self::factor_flops`],
+    /// [`Self::factor_bytes`]) before deciding whether to factor at all. Give it buffers with
+    /// [`Self::with_numeric`]; until then it cannot factor or solve.
+    pub fn analyze_cheapest_symbolic(
+        pattern: Arc<SymmetricPattern>,
+        orderings: &[Ordering],
+        precision: Precision,
+    ) -> Result<(Self, usize), SolveError> {
         let mut best: Option<(SymbolicCholesky<usize>, f64, usize)> = None;
         let mut reference_entries = usize::MAX;
         for (k, ordering) in orderings.iter().enumerate() {
@@ -186,9 +209,55 @@ impl Cholesky {
         let (symbolic, _, k) = best
             .ok_or_else(|| SolveError::Backend("no ordering to analyse the pattern with".into()))?;
         Ok((
-            Self::with_buffers(pattern, Arc::new(symbolic), precision)?,
+            Self::symbolic_only(pattern, Arc::new(symbolic), precision),
             k,
         ))
+    }
+
+    /// Symbolic analysis of `pattern` without numeric buffers (see
+    /// [`analyze_cheapest_symbolic`](Self::analyze_cheapest_symbolic)).
+    pub fn analyze_symbolic_only(
+        pattern: Arc<SymmetricPattern>,
+        ordering: Ordering,
+        precision: Precision,
+    ) -> Result<Self, SolveError> {
+        let symbolic = Self::analyze_symbolic(&pattern, ordering)?;
+        Ok(Self::symbolic_only(pattern, Arc::new(symbolic), precision))
+    }
+
+    /// This analysis with numeric buffers (itself if it has them).
+    pub fn with_numeric(self) -> Result<Self, SolveError> {
+        if self.numeric {
+            return Ok(self);
+        }
+        Self::with_buffers(self.pattern, self.symbolic, self.precision)
+    }
+
+    /// Whether this solver has numeric buffers (can factor and solve).
+    pub fn is_numeric(&self) -> bool {
+        self.numeric
+    }
+
+    fn symbolic_only(
+        pattern: Arc<SymmetricPattern>,
+        symbolic: Arc<SymbolicCholesky<usize>>,
+        precision: Precision,
+    ) -> Self {
+        let empty = || MemBuffer::new(faer::dyn_stack::StackReq::EMPTY);
+        Self {
+            pattern,
+            symbolic,
+            precision,
+            l_values: Aligned::empty(),
+            l_single: Aligned::empty(),
+            a_single: Vec::new(),
+            rhs_scratch: Aligned::empty(),
+            rhs_single: Aligned::empty(),
+            factor_scratch: empty(),
+            solve_scratch: empty(),
+            numeric: false,
+            factored: false,
+        }
     }
 
     fn analyze_symbolic(
@@ -286,6 +355,7 @@ impl Cholesky {
             rhs_single,
             factor_scratch,
             solve_scratch,
+            numeric: true,
             factored: false,
         })
     }
@@ -301,8 +371,12 @@ impl Cholesky {
     }
 
     /// A second solver for the same pattern sharing this one's symbolic analysis, with buffers
-    /// of its own (one per thread).
+    /// of its own (one per thread); without buffers if this one has none.
     pub fn share_symbolic(&self) -> Result<Self, SolveError> {
+        if !self.numeric {
+            let (p, s) = (self.pattern.clone(), self.symbolic.clone());
+            return Ok(Self::symbolic_only(p, s, self.precision));
+        }
         self.share_symbolic_with(self.precision)
     }
 
@@ -365,7 +439,7 @@ impl Cholesky {
 
     /// Number of stored entries of the factor $L$ (a measure of fill and memory).
     pub fn factor_nnz(&self) -> usize {
-        self.l_values.len.max(self.l_single.len)
+        self.symbolic.len_val()
     }
 
     /// Bytes of the stored factor in its precision (of a [`FrozenFactor`] copy, too).
@@ -375,6 +449,30 @@ impl Cholesky {
             Precision::Double => 8,
         };
         width * self.factor_nnz() as u64
+    }
+
+    /// Bytes of the numeric buffers a solver of this analysis holds (or would hold, before
+    /// [`Self::with_numeric`]): the factor in its precision, the matrix rounded to `f32` for
+    /// a single-precision factor, and the factorization's and a solve's scratch.
+    pub fn numeric_bytes(&self) -> u64 {
+        let n = self.pattern.n() as u64;
+        let (scratch, rounded, rhs) = match self.precision {
+            Precision::Single => (
+                self.symbolic
+                    .factorize_numeric_llt_scratch::<f32>(Par::Seq, Default::default())
+                    .or(self.symbolic.solve_in_place_scratch::<f32>(1, Par::Seq)),
+                4 * self.pattern.nnz() as u64,
+                12 * n,
+            ),
+            Precision::Double => (
+                self.symbolic
+                    .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
+                    .or(self.symbolic.solve_in_place_scratch::<f64>(1, Par::Seq)),
+                0,
+                8 * n,
+            ),
+        };
+        self.factor_bytes() + rounded + rhs + scratch.size_bytes() as u64
     }
 
     /// Multiply-adds of one numeric factorization, from the symbolic structure: per
@@ -395,6 +493,11 @@ impl Cholesky {
     /// pattern slot). Reuses the symbolic analysis and all buffers.
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolveError> {
         self.factored = false;
+        if !self.numeric {
+            return Err(SolveError::Backend(
+                "a symbolic analysis without numeric buffers cannot factor".into(),
+            ));
+        }
         if values.len() != self.pattern.nnz() {
             return Err(SolveError::Dimension {
                 what: "values",

@@ -297,3 +297,30 @@ fn the_cheapest_ordering_never_has_more_entries_than_the_first() {
     let (c, k) = Cholesky::analyze_cheapest(p.clone(), &orders(j, i), Precision::Double).unwrap();
     assert_eq!((k, c.factor_flops()), (0, costs[j].0));
 }
+
+#[test]
+fn a_symbolic_analysis_allocates_and_factors_nothing_until_given_buffers() {
+    let n = 400;
+    let (p, v) = SymmetricPattern::from_triplets(n, &random_spd(n, 11)).unwrap();
+    let p = Arc::new(p);
+    let (mut symbolic, k) =
+        Cholesky::analyze_cheapest_symbolic(p.clone(), &[Ordering::Amd], Precision::Single)
+            .unwrap();
+    assert_eq!(k, 0);
+    assert!(!symbolic.is_numeric());
+    assert!(symbolic.factorize(&v).is_err());
+    // A thread's share of a symbolic analysis has no buffers either.
+    assert!(!symbolic.share_symbolic().unwrap().is_numeric());
+    let (full, _) = Cholesky::analyze_cheapest(p, &[Ordering::Amd], Precision::Single).unwrap();
+    assert_eq!(symbolic.factor_nnz(), full.factor_nnz());
+    assert_eq!(symbolic.factor_flops(), full.factor_flops());
+    assert_eq!(symbolic.numeric_bytes(), full.numeric_bytes());
+    // The factor, the f32 matrix and the scratch are all counted.
+    assert!(full.numeric_bytes() > full.factor_bytes() + 4 * full.pattern().nnz() as u64);
+    let mut numeric = symbolic.with_numeric().unwrap();
+    assert!(numeric.is_numeric());
+    numeric.factorize(&v).unwrap();
+    let mut x = vec![1.0; n];
+    numeric.solve_one(&mut x).unwrap();
+    assert!(x.iter().all(|x| x.is_finite()));
+}

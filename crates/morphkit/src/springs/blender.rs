@@ -155,7 +155,13 @@ impl PhysicalBlend {
     ) -> Vec<Option<R>> {
         let threads = threads.clamp(1, items.len().max(1));
         let mut workspaces = Vec::with_capacity(threads - 1);
-        for _ in 1..threads {
+        let s = &self.rig.summary;
+        for k in 1..threads {
+            // A further workspace only while the blend's predicted memory stays in the limit.
+            if s.predicted_bytes + k as u64 * s.workspace_bytes > self.rig.options.max_memory_bytes
+            {
+                break;
+            }
             let aggregation = match &self.rig.aggregation {
                 Some(levels) => match AggregationPreconditioner::new(levels.clone()) {
                     Ok(a) => Some(a),
@@ -352,18 +358,29 @@ impl PhysicalBlend {
     /// [`prepare_interactive`](Self::prepare_interactive) through a cache file: where `path`
     /// holds a preparation of this very rig (same shapes, triangles, options and terms), it is
     /// read instead of solved; otherwise (no file, damaged, another rig) the preparation runs
-    /// and replaces it, written atomically. Fails only when the file cannot be written.
+    /// and replaces it, written atomically. Once prepared, the file is only written where
+    /// there is none, never read. Fails only when the file cannot be written.
     pub fn prepare_interactive_cached(
         &mut self,
         threads: usize,
         path: &std::path::Path,
     ) -> Result<InteractiveCacheUse, BlendError> {
+        let unused = InteractiveCacheUse {
+            loaded: false,
+            replaced: None,
+        };
+        if self.interactive.is_some() {
+            if !path.exists() {
+                self.write_interactive(path)?;
+            }
+            return Ok(unused);
+        }
         let replaced = match std::fs::read(path) {
             Ok(bytes) => match self.load_interactive(&bytes) {
                 Ok(_) => {
                     return Ok(InteractiveCacheUse {
                         loaded: true,
-                        replaced: None,
+                        ..unused
                     })
                 }
                 Err(e) => Some(e.to_string()),
@@ -372,13 +389,14 @@ impl PhysicalBlend {
             Err(e) => Some(format!("unreadable: {e}")),
         };
         self.prepare_interactive(threads);
-        let bytes = self.interactive_bytes().expect("prepared above");
+        self.write_interactive(path)?;
+        Ok(InteractiveCacheUse { replaced, ..unused })
+    }
+
+    fn write_interactive(&self, path: &std::path::Path) -> Result<(), BlendError> {
+        let bytes = self.interactive_bytes().expect("prepared");
         crate::io::write_atomic(path, &bytes).map_err(|e| BlendError::InteractiveCache {
             problem: format!("cannot write {}: {e}", path.display()),
-        })?;
-        Ok(InteractiveCacheUse {
-            loaded: false,
-            replaced,
         })
     }
 

@@ -9,7 +9,9 @@
 //!    scaled to the whole mesh. Scaled linearly it under-estimates every surface whose
 //!    factor fill per vertex grows with size (nested dissection of a sheet: `n log n`), and
 //!    a ball's rim fills less than the interior, so the mesh is refused only when the linear
-//!    scaling is over the limit; the message gives the `n log n` scaling, the likelier size.
+//!    scaling is over the limit; the message gives the likelier size: the `n log n` scaling
+//!    where only a factor can precondition, the linear one where the aggregation cycle may
+//!    replace it (its levels and the per-vertex structures grow like the vertices).
 //!
 //! What passes both goes on to the exact analysis, which decides as before.
 
@@ -35,8 +37,9 @@ pub(crate) fn check_early(
     exact: fn(&ShapeSet, &BlendOptions) -> Result<u64, BlendError>,
 ) -> Result<(), BlendError> {
     let n = shapes.num_vertices();
-    let bound = predicted_bytes_lower_bound(n, shapes.triangles(), o.factor_precision)
-        + StartSamples::bytes(n, shapes.len() - 1, o.sampled_start);
+    let bound =
+        predicted_bytes_lower_bound(n, shapes.triangles(), o.factor_precision, o.may_aggregate())
+            + StartSamples::bytes(n, shapes.len() - 1, o.sampled_start);
     let too_large = |predicted_bytes, basis| BlendError::TooLarge {
         vertices: n,
         predicted_bytes,
@@ -60,9 +63,15 @@ pub(crate) fn check_early(
     let scale = n as f64 / m as f64;
     let linear = part_bytes as f64 * scale;
     if linear > o.max_memory_bytes as f64 {
-        let nlogn = linear * (n as f64).log2() / (m as f64).log2();
+        // Where the aggregation cycle may replace the factor, the memory grows like the
+        // vertices (the cycle and the per-vertex structures); a factor's fill like n log n.
+        let likely = if o.may_aggregate() {
+            linear
+        } else {
+            linear * (n as f64).log2() / (m as f64).log2()
+        };
         return Err(too_large(
-            nlogn as u64,
+            likely as u64,
             MemoryEstimate::Sampled { vertices: m },
         ));
     }
@@ -170,8 +179,14 @@ mod tests {
         .unwrap();
         let o = BlendOptions::default();
         let exact = super::super::rig::Rig::estimate_bytes(&shapes, &o).unwrap();
+        // A limit under the exact estimate but over the lower bound from the triangles
+        // (which, counting the per-vertex structures, is within 20 % of it on a sheet).
+        let n = shapes.num_vertices();
+        let bound = predicted_bytes_lower_bound(n, shapes.triangles(), o.factor_precision, true)
+            + StartSamples::bytes(n, 1, o.sampled_start);
+        assert!(bound < exact * 9 / 10, "bound {bound}, exact {exact}");
         let under = BlendOptions {
-            max_memory_bytes: exact / 2,
+            max_memory_bytes: (bound + exact * 9 / 10) / 2,
             ..o.clone()
         };
         match check_early(&shapes, &under, super::super::rig::Rig::estimate_bytes) {

@@ -224,7 +224,9 @@ pub enum Preconditioner {
     Aggregation,
     /// [`Self::Aggregation`] when the Cholesky factor would cost more than
     /// [`AGGREGATION_FLOPS_PER_ENTRY`] multiply-adds per stored Hessian entry (a count from the
-    /// symbolic analysis, never a timing), [`Self::Cholesky`] otherwise. The default.
+    /// symbolic analysis, never a timing), [`Self::Cholesky`] otherwise. The default. (Not
+    /// when only the cycle would fit [`BlendOptions::max_memory_bytes`]: on bent surface
+    /// sheets the cycle-preconditioned iteration does not converge; such blends are refused.)
     #[default]
     Auto,
 }
@@ -238,6 +240,13 @@ impl BlendOptions {
     /// factor, for a factorization of `factor_flops` multiply-adds of a Hessian with
     /// `hessian_nnz` stored entries (see [`Preconditioner`]). Only the trust-region iteration
     /// has an inner CG.
+    /// Whether the aggregation cycle may precondition (so that the factor's memory does not
+    /// decide a refusal before the scalar analysis).
+    pub(crate) fn may_aggregate(&self) -> bool {
+        self.preconditioner != Preconditioner::Cholesky
+            && self.linear_solver == LinearSolver::TrustRegion
+    }
+
     pub(crate) fn uses_aggregation(&self, factor_flops: f64, hessian_nnz: usize) -> bool {
         let wanted = match self.preconditioner {
             Preconditioner::Aggregation => true,
@@ -372,8 +381,13 @@ pub struct RigSummary {
     /// The fill-reducing ordering used: [`FillOrdering::Amd`] or
     /// [`FillOrdering::NestedDissection`] (never `Cheapest`, which picks one of them).
     pub ordering: FillOrdering,
-    /// Predicted bytes of one solver workspace (the memory check).
+    /// Predicted bytes of the blend with one solver workspace (the memory check): the
+    /// system, the preconditioner actually used and the reference factors' share.
     pub predicted_bytes: u64,
+    /// Predicted bytes of each further workspace (a thread solving frames in parallel);
+    /// threads get one only while the total stays within
+    /// [`BlendOptions::max_memory_bytes`].
+    pub workspace_bytes: u64,
     /// Targets whose frames may precondition with
     /// [reference factors](BlendOptions::reference_factor_bytes) (the first this many).
     pub reference_targets: usize,

@@ -157,13 +157,15 @@ impl FreeSystem {
     }
 
     /// Symbolic analysis of the scalar pattern with the cheapest of `orderings` (fewest
-    /// multiply-adds per factorization, the first of equals), and its index.
+    /// multiply-adds per factorization, the first of equals), and its index; no numeric
+    /// buffers yet ([`Cholesky::with_numeric`]), so that a blend preconditioned by the
+    /// aggregation cycle never allocates the fine factor.
     pub fn analyze(
         &self,
         orderings: &[Ordering],
         precision: Precision,
     ) -> Result<(Cholesky, usize), SolveError> {
-        Cholesky::analyze_cheapest(Arc::clone(&self.pattern), orderings, precision)
+        Cholesky::analyze_cheapest_symbolic(Arc::clone(&self.pattern), orderings, precision)
     }
 }
 
@@ -193,16 +195,66 @@ pub(crate) fn expand_vertex_order(order: &[usize], dof_index: &[u32]) -> Vec<usi
     out
 }
 
-/// Predicted bytes of the Newton solve of a system: the scalar pattern and its values (twice:
-/// exact and projected), the block Hessian, and the factor of a vertex-level symbolic analysis
-/// scaled by 9 (every vertex pair is a 3×3 block) in `precision`, per solver workspace. Computed before any
-/// scalar-level allocation, so that a mesh too large for the machine is refused up front.
+/// Bytes per vertex of what a blend holds besides the Newton system and its preconditioner:
+/// springs and hinges with their rest data, topology, shapes, constraints and holds, the
+/// rotation-aware predictor's Poisson factor, and the vectors of a solve. Measured, not
+/// derived: the heap peak of one-frame blends of generated wavy sheets (docs/performance.md,
+/// "Film scale") less the counted parts.
+pub(crate) const RIG_BYTES_PER_VERTEX: u64 = 4096;
+
+/// The parts of a blend's predicted memory for `nv` vertices and `pairs` coupled vertex
+/// pairs, without the preconditioner: shared by every thread ([`Self::shared`]: the scalar
+/// pattern and its index maps, [`RIG_BYTES_PER_VERTEX`]) and per solver workspace
+/// ([`Self::workspace`]: the exact and projected Hessian values and blocks).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct SystemBytes {
+    pub shared: u64,
+    pub workspace: u64,
+}
+
+impl SystemBytes {
+    pub fn new(nv: u64, pairs: u64) -> Self {
+        let scalar_nnz = 9 * pairs + 6 * nv;
+        let blocks = nv + pairs;
+        Self {
+            // Row indices and column starts; value slots of every block entry; free indices.
+            shared: 8 * scalar_nnz + 8 * 3 * nv + 36 * blocks + 12 * nv + RIG_BYTES_PER_VERTEX * nv,
+            // Two value arrays (exact and projected), two sets of 3×3 blocks.
+            workspace: 16 * scalar_nnz + 2 * 72 * blocks,
+        }
+    }
+}
+
+/// A fine factor's numeric memory from a vertex-level factor of `l_vertex` entries, before
+/// the scalar analysis: every vertex pair is a 3×3 block, in `precision`; a single-precision
+/// factor also keeps the matrix rounded to `f32`; the factorization's scratch, about a fifth
+/// of the factor on sheets (measured 22 % at 40k vertices, 17 % at 250k).
+fn factor_bytes(nv: u64, pairs: u64, l_vertex: u64, precision: Precision) -> u64 {
+    let factor = 9 * l_vertex;
+    let (per_value, rounded) = match precision {
+        Precision::Double => (8, 0),
+        Precision::Single => (4, 4 * (9 * pairs + 6 * nv)),
+    };
+    let values = per_value * factor;
+    values + values / 5 + rounded
+}
+
+/// Predicted bytes of a blend over `block_pattern` before the scalar system is built: the
+/// [`SystemBytes`] and, unless `without_factor`, the fill of a vertex-level symbolic analysis
+/// (see [`factor_bytes`]). `without_factor` is the aggregation cycle's lower bound (its
+/// coarse levels are counted once they are built).
 pub(crate) fn predicted_bytes(
     block_pattern: &BlockPattern,
     ordering_vertices: Option<&[usize]>,
     precision: Precision,
+    without_factor: bool,
 ) -> Result<u64, SolveError> {
     let n = block_pattern.num_vertices();
+    let (nv, pairs) = (n as u64, block_pattern.num_pairs() as u64);
+    let s = SystemBytes::new(nv, pairs);
+    if without_factor {
+        return Ok(s.shared + s.workspace);
+    }
     let mut entries = Vec::with_capacity(block_pattern.num_pairs());
     for i in 0..n {
         for &j in block_pattern.row(i) {
@@ -215,23 +267,19 @@ pub(crate) fn predicted_bytes(
         None => Ordering::Amd,
     };
     let l_vertex = Cholesky::predicted_factor_nnz(&vp, ordering)? as u64;
-    Ok(bytes_of(
-        n as u64,
-        block_pattern.num_pairs() as u64,
-        l_vertex,
-        precision,
-    ))
+    Ok(s.shared + s.workspace + factor_bytes(nv, pairs, l_vertex, precision))
 }
 
 /// A lower bound of [`predicted_bytes`] from the triangles alone, before any connectivity is
 /// built: every distinct triangle edge is a coupled pair (counted by one sort), and the factor
-/// holds at least the matrix's lower triangle. A mesh over the limit by this bound is refused
-/// in the time it took to read it (issue 39: a 2M-vertex sheet took 35 s and 3.6 GB of set-up
-/// to be refused).
+/// (unless `without_factor`) holds at least the matrix's lower triangle. A mesh over the limit
+/// by this bound is refused in the time it took to read it (issue 39: a 2M-vertex sheet took
+/// 35 s and 3.6 GB of set-up to be refused).
 pub(crate) fn predicted_bytes_lower_bound(
     vertices: usize,
     triangles: &[[u32; 3]],
     precision: Precision,
+    without_factor: bool,
 ) -> u64 {
     let mut edges: Vec<u64> = triangles
         .iter()
@@ -243,20 +291,11 @@ pub(crate) fn predicted_bytes_lower_bound(
     edges.dedup();
     let n = vertices as u64;
     let pairs = edges.len() as u64;
-    bytes_of(n, pairs, n + pairs, precision)
-}
-
-/// [`predicted_bytes`] of `nv` vertices, `pairs` coupled vertex pairs and a vertex-level
-/// factor of `l_vertex` entries.
-fn bytes_of(nv: u64, pairs: u64, l_vertex: u64, precision: Precision) -> u64 {
-    let scalar_nnz = 9 * pairs + 6 * nv;
-    let factor = 9 * l_vertex;
-    // 8 (or 4) bytes per factor value, 16 per scalar entry (index + value), two value arrays,
-    // two sets of blocks (projected and exact, assembled in one pass); a single-precision
-    // factor also keeps the matrix rounded to f32.
-    let (per_value, rounded) = match precision {
-        Precision::Double => (8, 0),
-        Precision::Single => (4, 4 * scalar_nnz),
+    let s = SystemBytes::new(n, pairs);
+    let factor = if without_factor {
+        0
+    } else {
+        factor_bytes(n, pairs, n + pairs, precision)
     };
-    per_value * factor + 16 * scalar_nnz + 16 * scalar_nnz + rounded + 2 * 72 * (nv + pairs)
+    s.shared + s.workspace + factor
 }
