@@ -56,9 +56,9 @@ def shoot():
             r.tag_redraw()
     # Blender 3.4 cannot switch the sidebar tab from Python: show the panels in the tab that
     # is open (Item), below its Transform panel (collapsed), for the picture only.
-    from morphkit_blender import physical, synth_ops, transfer_ops
+    from morphkit_blender import physical_ui, synth_ops, transfer_ops
 
-    for cls in (physical.MORPHKIT_PT_physical, transfer_ops.MORPHKIT_PT_transfer,
+    for cls in (physical_ui.MORPHKIT_PT_physical, transfer_ops.MORPHKIT_PT_transfer,
                 synth_ops.MORPHKIT_PT_synth):
         bpy.utils.unregister_class(cls)
         cls.bl_category = "Item"

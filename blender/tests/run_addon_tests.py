@@ -149,6 +149,31 @@ check(cyl["morphkit_showing"] == "physical", "the synchronous live update shows 
 err = float(np.abs(result_key() - ref_blend.solve(0.7)).max()) / diag(V0)
 check(err < 1e-6, f"synchronous live update differs by {err}")
 cyl.morphkit_live_preview = True
+# Interactive while dragging: the interactive shape (within its estimate of the equilibrium)
+# first, then the equilibrium once the sliders rest; the same as the module's.
+cyl.morphkit_interactive = True
+key.value = 0.35
+bpy.context.view_layer.update()
+physical._live_handler(bpy.context.scene)
+job = physical._jobs[cyl.name]
+job.join()
+physical._poll()
+check(cyl["morphkit_showing"] == "interactive", "the interactive shape is not shown first")
+fast = morphkit.PhysicalBlend(V0, [V1], F_b)
+err = float(np.abs(result_key() - fast.solve(0.35, interactive=True)).max()) / diag(V0)
+check(err < 1e-6, f"the interactive shape differs from the module's by {err}")
+estimate = float(cyl["morphkit_error_estimate"])
+full = ref_blend.solve(0.35)
+dist = float(np.linalg.norm(result_key() - full, axis=1).max()) / diag(V0)
+check(dist <= estimate + 1e-6, f"the interactive shape is {dist} from the equilibrium, over {estimate}")
+check(physical.finish_live(), "the equilibrium after the interactive shape did not finish")
+check(cyl["morphkit_showing"] == "physical", "the equilibrium did not replace the interactive shape")
+err = float(np.abs(result_key() - full).max()) / diag(V0)
+check(err < 1e-6, f"the equilibrium after the interactive shape differs by {err}")
+results["live_interactive_ms"] = float(cyl["morphkit_interactive_ms"])
+results["live_interactive_estimate"] = estimate
+results["live_interactive_error"] = dist
+cyl.morphkit_interactive = False
 cyl.morphkit_live = False
 
 # Internal springs (the cylinder is closed): the Physical update equals the module's blend with
