@@ -5,22 +5,7 @@ use common::*;
 
 use std::path::Path;
 
-/// Reads the `v` lines of an OBJ file.
-fn vertices(path: &Path) -> Vec<[f64; 3]> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .filter(|l| l.starts_with("v "))
-        .map(|l| {
-            let v: Vec<f64> = l
-                .split_whitespace()
-                .skip(1)
-                .map(|x| x.parse().unwrap())
-                .collect();
-            [v[0], v[1], v[2]]
-        })
-        .collect()
-}
+use common::obj_vertices as vertices;
 
 #[test]
 fn demo_writes_its_files_and_shows_the_linear_blend_shrinking() {

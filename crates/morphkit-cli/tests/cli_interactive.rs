@@ -7,21 +7,7 @@ use common::*;
 
 use std::path::Path;
 
-fn vertices(path: &Path) -> Vec<[f64; 3]> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .filter(|l| l.starts_with("v "))
-        .map(|l| {
-            let v: Vec<f64> = l
-                .split_whitespace()
-                .skip(1)
-                .map(|x| x.parse().unwrap())
-                .collect();
-            [v[0], v[1], v[2]]
-        })
-        .collect()
-}
+use common::obj_vertices as vertices;
 
 fn refs(v: &[String]) -> Vec<&str> {
     v.iter().map(String::as_str).collect()
@@ -111,47 +97,21 @@ fn interactive_frames_are_within_their_estimate_and_the_cache_is_reused() {
             "{name}"
         );
     }
-    // --refine and --interactive-cache need --interactive; --linear excludes it.
-    let e = fails(&blend_args(
-        &base,
-        &target,
-        &[
-            "--alpha",
-            "0.5",
-            "--refine",
-            "1",
-            "--out",
-            s(&d.join("x.obj")),
-        ],
-    ));
-    assert!(e.contains("--interactive"), "{e}");
-    let e = fails(&blend_args(
-        &base,
-        &target,
-        &[
-            "--alpha",
-            "0.5",
-            "--interactive",
-            "--linear",
-            "--out",
-            s(&d.join("x.obj")),
-        ],
-    ));
-    assert!(e.contains("--linear"), "{e}");
-    // The cache may not be an input.
-    let e = fails(&blend_args(
-        &base,
-        &target,
-        &[
-            "--alpha",
-            "0.5",
-            "--interactive",
+    // --refine and --interactive-cache need --interactive; --linear excludes it; the cache
+    // may not be an input.
+    let x = d.join("x.obj");
+    for (extra, says) in [
+        (vec!["--refine", "1"], "--interactive"),
+        (vec!["--interactive", "--linear"], "--linear"),
+        (
+            vec!["--interactive", "--interactive-cache", s(&target)],
             "--interactive-cache",
-            s(&target),
-            "--out",
-            s(&d.join("x.obj")),
-        ],
-    ));
-    assert!(e.contains("--interactive-cache"), "{e}");
+        ),
+    ] {
+        let mut rest = vec!["--alpha", "0.5", "--out", s(&x)];
+        rest.extend(extra);
+        let e = fails(&blend_args(&base, &target, &rest));
+        assert!(e.contains(says), "{rest:?}: {e}");
+    }
     assert!(!d.join("x.obj").exists());
 }
