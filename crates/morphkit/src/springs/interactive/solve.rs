@@ -206,17 +206,23 @@ impl Rig {
                     }
                     sub.expand(&dy, &mut step);
                     stats.newton_iterations += 1;
-                    let Some(a) = line_search(|a| {
+                    // Each trial point's energy comes with its gradient (one pass over the
+                    // terms): the first step is nearly always taken, and its gradient is
+                    // the next iteration's.
+                    let mut e_new = e;
+                    let found = line_search(|a| {
                         trial.copy_from_slice(&x);
                         system.add_step(&mut trial, a, &step);
-                        total_energy(terms, params, &trial) <= e + 1e-4 * a * slope
-                    }) else {
+                        e_new = gradient(&trial, &mut g, &mut gf);
+                        e_new <= e + 1e-4 * a * slope
+                    });
+                    let Some(a) = found else {
+                        gradient(&x, &mut g, &mut gf);
                         break;
                     };
                     stats.rejected_steps += a.1;
                     let a = a.0;
                     x.copy_from_slice(&trial);
-                    let e_new = gradient(&x, &mut g, &mut gf);
                     let gn = sub.reduce(&gf);
                     let s = &dy * a;
                     let yv = &gn - &gr;
