@@ -141,6 +141,13 @@ fn a_saved_preparation_gives_the_same_bits_and_is_refused_for_another_rig() {
         assert_same_frame(&a.positions, &b.positions, &format!("{w:?} loaded"));
         assert_eq!(a.stats.error_estimate, b.stats.error_estimate);
     }
+    // The sampled start's fields came with the file: the reopened rig solved nothing, also
+    // for the full solves of the weights it now moves through.
+    assert_eq!(reopened.start_samples_solved(), 0);
+    let full = reopened.solve(&Weights::Delta(vec![0.4, 0.3])).unwrap();
+    assert_eq!(reopened.start_samples_solved(), 0);
+    let fresh_full = fresh.solve(&Weights::Delta(vec![0.4, 0.3])).unwrap();
+    assert_same_frame(&full.positions, &fresh_full.positions, "full solve, loaded");
     // Damaged, truncated or foreign bytes are refused, and leave the blend unprepared.
     let mut other = PhysicalBlend::new(&rig(), &BlendOptions::default()).unwrap();
     for (what, bad) in [
@@ -148,6 +155,13 @@ fn a_saved_preparation_gives_the_same_bits_and_is_refused_for_another_rig() {
         ("empty", Vec::new()),
         ("not ours", b"MKINTER9".repeat(8)),
         ("trailing", [bytes.clone(), vec![0; 8]].concat()),
+        ("bad field tag", {
+            // The last target's last field tag sits 8 (3 #V + 1) bytes from the end.
+            let mut b = bytes.clone();
+            let at = b.len() - 8 * (3 * rig().num_vertices() + 1);
+            b[at..at + 8].copy_from_slice(&7u64.to_le_bytes());
+            b
+        }),
     ] {
         let e = other.load_interactive(&bad).unwrap_err();
         assert!(

@@ -340,8 +340,8 @@ impl PhysicalBlend {
     /// same rig is opened again; `None` before [`prepare_interactive`](Self::prepare_interactive).
     pub fn interactive_bytes(&self) -> Option<Vec<u8>> {
         let space = self.interactive.as_ref()?;
-        let (n, nf) = (self.rig.shapes.len(), self.rig.system.num_free());
-        Some(encode(space, self.rig.cache_key(), n, nf))
+        let sizes = self.cache_sizes();
+        Some(encode(space, &self.rig.samples, self.rig.cache_key(), sizes))
     }
 
     /// Takes a preparation saved by [`interactive_bytes`](Self::interactive_bytes): the same
@@ -350,9 +350,21 @@ impl PhysicalBlend {
     /// format version, or were made for another rig (other shapes, triangles, options or
     /// energy terms); the blend is then unchanged.
     pub fn load_interactive(&mut self, bytes: &[u8]) -> Result<&InteractiveSpace, BlendError> {
-        let (n, nf) = (self.rig.shapes.len(), self.rig.system.num_free());
-        let space = decode(bytes, self.rig.cache_key(), n, nf)?;
+        let (space, fields) = decode(bytes, self.rig.cache_key(), self.cache_sizes())?;
+        for (s, three) in fields.into_iter().enumerate() {
+            for (k, field) in three.into_iter().enumerate() {
+                if let Some(field) = field {
+                    self.rig.samples.restore(s + 1, k, field);
+                }
+            }
+        }
         Ok(self.interactive.insert(space))
+    }
+
+    /// Shape, free-coordinate and vertex counts, as the interactive cache records them.
+    fn cache_sizes(&self) -> [usize; 3] {
+        let r = &self.rig;
+        [r.shapes.len(), r.system.num_free(), r.shapes.num_vertices()]
     }
 
     /// [`prepare_interactive`](Self::prepare_interactive) through a cache file: where `path`

@@ -82,6 +82,18 @@ impl StartSamples {
         self.cells[s - 1][k].get().is_some()
     }
 
+    /// Field `k` of target `s` where it has been computed (`None` where not yet).
+    pub fn computed(&self, s: usize, k: usize) -> Option<&Field> {
+        self.cells[s - 1][k].get()
+    }
+
+    /// Sets field `k` of target `s` to `field` where it has not been computed yet (a saved
+    /// preparation restoring what its solves gave: the same field, bit for bit, that the
+    /// solve would give again, since every field is a function of the rig alone).
+    pub fn restore(&self, s: usize, k: usize, field: Field) {
+        let _ = self.cells[s - 1][k].set(field);
+    }
+
     /// Sample solves run so far.
     pub fn solved(&self) -> usize {
         self.solved.load(Ordering::Relaxed)

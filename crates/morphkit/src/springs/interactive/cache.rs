@@ -1,19 +1,26 @@
 //! A prepared [`InteractiveSpace`] as bytes, so that reopening a rig costs a file read instead
 //! of the preparation's solves (issue 38).
 //!
-//! Layout (little-endian): the magic `MKINTER1`; the rig's key (`u64`, [`Rig::cache_key`]);
-//! the shape count $n$ and free-coordinate count $n_f$; the unconverged count; the diagonal;
-//! the preparation's seconds; the $n - 1$ checked errors; the snapshot count, then per
-//! snapshot its $n$ coefficients, its active targets (count, then indices), its left-out
-//! error and its $n_f$ correction values. Every `f64` is stored by its bits, so a loaded space
-//! gives the same interactive shapes, bit for bit, as the one that was saved.
+//! Layout (little-endian): the magic `MKINTER2`; the rig's key (`u64`, [`Rig::cache_key`]);
+//! the shape count $n$, free-coordinate count $n_f$ and vertex count $n_v$; the unconverged
+//! count; the diagonal; the preparation's seconds; the $n - 1$ checked errors; the snapshot
+//! count, then per snapshot its $n$ coefficients, its active targets (count, then indices),
+//! its left-out error and its $n_f$ correction values; then, per target and per sample
+//! ([`SAMPLES`](crate::springs::sampled_start::SAMPLES)), the sampled start's correction
+//! field: a tag (0 not computed, 1 did not converge, 2 stored) and, for 2, its $3 n_v$
+//! values. Every `f64` is stored by its bits, so a loaded space gives the same interactive
+//! shapes, bit for bit, as the one that was saved; and since the start's fields come with it,
+//! the first slider change after a reopening solves nothing either (version 1 left them out,
+//! so each target's first change ran its three sample solves: 1 s on the horse).
 
 use super::{InteractiveSpace, Snapshot};
+use crate::mesh::Point;
+use crate::springs::sampled_start::{Field, StartSamples, SAMPLES};
 use crate::springs::rig::Rig;
 use crate::springs::terms::EnergyTerm;
 use crate::springs::BlendError;
 
-const MAGIC: &[u8; 8] = b"MKINTER1";
+const MAGIC: &[u8; 8] = b"MKINTER2";
 
 impl Rig {
     /// A fingerprint of everything an interactive space depends on: every shape's positions
@@ -77,17 +84,20 @@ impl Fnv {
 }
 
 /// The bytes of `space`, prepared for the rig with key `key`.
+/// The bytes of `space` and of the start's fields `samples`, prepared for the rig with key
+/// `key`, `n` shapes, `nf` free coordinates and `nv` vertices.
 pub(in crate::springs) fn encode(
     space: &InteractiveSpace,
+    samples: &StartSamples,
     key: u64,
-    n: usize,
-    nf: usize,
+    [n, nf, nv]: [usize; 3],
 ) -> Vec<u8> {
     let per = 8 * (2 * n + nf + 4);
-    let mut out = Vec::with_capacity(64 + 8 * n + per * space.snapshots.len());
+    let fields = 8 * (n - 1) * SAMPLES.len() * (1 + 3 * nv);
+    let mut out = Vec::with_capacity(72 + 8 * n + per * space.snapshots.len() + fields);
     out.extend_from_slice(MAGIC);
     let word = |out: &mut Vec<u8>, w: u64| out.extend_from_slice(&w.to_le_bytes());
-    for w in [key, n as u64, nf as u64, space.unconverged as u64] {
+    for w in [key, n as u64, nf as u64, nv as u64, space.unconverged as u64] {
         word(&mut out, w);
     }
     word(&mut out, space.diagonal.to_bits());
@@ -103,17 +113,34 @@ pub(in crate::springs) fn encode(
         word(&mut out, s.left_out.to_bits());
         s.d.iter().for_each(|x| word(&mut out, x.to_bits()));
     }
+    for s in 1..n {
+        for k in 0..SAMPLES.len() {
+            match samples.computed(s, k) {
+                None => word(&mut out, 0),
+                Some(None) => word(&mut out, 1),
+                Some(Some(field)) => {
+                    word(&mut out, 2);
+                    for x in field.iter().flatten() {
+                        word(&mut out, x.to_bits());
+                    }
+                }
+            }
+        }
+    }
     out
 }
 
-/// Reads what [`encode`] wrote, for the rig with key `key`, `n` shapes and `nf` free
-/// coordinates; anything else is refused, saying why.
+/// A decoded preparation: the space, and per target and sample the start's field where it
+/// was stored (`None`: not computed when saved).
+pub(in crate::springs) type Decoded = (InteractiveSpace, Vec<[Option<Field>; 3]>);
+
+/// Reads what [`encode`] wrote, for the rig with key `key`, `n` shapes, `nf` free
+/// coordinates and `nv` vertices; anything else is refused, saying why.
 pub(in crate::springs) fn decode(
     bytes: &[u8],
     key: u64,
-    n: usize,
-    nf: usize,
-) -> Result<InteractiveSpace, BlendError> {
+    [n, nf, nv]: [usize; 3],
+) -> Result<Decoded, BlendError> {
     let fail = |problem: String| BlendError::InteractiveCache { problem };
     if bytes.len() < 8 || &bytes[..8] != MAGIC {
         return Err(fail(
@@ -122,10 +149,10 @@ pub(in crate::springs) fn decode(
     }
     let mut r = Reader { bytes, at: 8 };
     let stored = r.word()?;
-    let (sn, snf) = (r.word()? as usize, r.word()? as usize);
-    if stored != key || sn != n || snf != nf {
+    let (sn, snf, snv) = (r.word()? as usize, r.word()? as usize, r.word()? as usize);
+    if stored != key || sn != n || snf != nf || snv != nv {
         return Err(fail(format!(
-            "made for another rig or other options ({sn} shapes, {snf} free coordinates, key {stored:016x}; this rig: {n}, {nf}, {key:016x})"
+            "made for another rig or other options ({sn} shapes, {snf} free coordinates, {snv} vertices, key {stored:016x}; this rig: {n}, {nf}, {nv}, {key:016x})"
         )));
     }
     let unconverged = r.word()? as usize;
@@ -163,19 +190,43 @@ pub(in crate::springs) fn decode(
             left_out,
         });
     }
+    let mut fields = Vec::with_capacity(n - 1);
+    for s in 1..n {
+        let mut three: [Option<Field>; 3] = Default::default();
+        for (k, cell) in three.iter_mut().enumerate() {
+            *cell = match r.word()? {
+                0 => None,
+                1 => Some(None),
+                2 => {
+                    let mut field: Vec<Point> = Vec::with_capacity(nv);
+                    for _ in 0..nv {
+                        field.push([r.float()?, r.float()?, r.float()?]);
+                    }
+                    Some(Some(std::sync::Arc::new(field)))
+                }
+                tag => {
+                    return Err(fail(format!(
+                        "target {s}, start sample {k}: unknown field tag {tag}"
+                    )))
+                }
+            };
+        }
+        fields.push(three);
+    }
     if r.at != bytes.len() {
         return Err(fail(format!(
-            "{} bytes after the last snapshot",
+            "{} bytes after the last start field",
             bytes.len() - r.at
         )));
     }
-    Ok(InteractiveSpace {
+    let space = InteractiveSpace {
         snapshots,
         checked,
         unconverged,
         diagonal,
         prepare_seconds,
-    })
+    };
+    Ok((space, fields))
 }
 
 struct Reader<'a> {
