@@ -8,7 +8,9 @@
 //! - materials, the texture and its image, UV sets, primitives and the node come back as they
 //!   were (JSON compared), and the Khronos validator finds no error;
 //! - Blender imports the result: one object with the shape keys, and its last animation frame
-//!   equal to the last OBJ frame.
+//!   equal to the last OBJ frame;
+//! - `--interactive` on the same export (issue 38): welded alike, each frame within 1e-3 of the
+//!   diagonal of the full solve's and within its own error estimate, the asset back whole.
 //!
 //! Skipped without `blender` or `MORPHKIT_DATA`, unless MORPHKIT_REQUIRE_BLENDER is set (CI),
 //! and failing when MORPHKIT_DATA is set but a file is missing.
@@ -212,6 +214,57 @@ fn an_artists_textured_two_material_export_blends_closed_and_comes_back_whole() 
     assert_eq!(carried_part(&got), carried_part(&input));
     assert_eq!(got["animations"][0]["name"], "keys-physical");
     fixture::assert_valid(&[&out]);
+    // The interactive mode (issue 38) on the same export: welded the same way, every frame
+    // within 1e-3 of the diagonal of the full solve's and within its own estimate, and the
+    // asset back whole.
+    let (fast, fast_frames, fast_report) = (
+        d.join("interactive.glb"),
+        d.join("interactive"),
+        d.join("interactive.json"),
+    );
+    for o in [&fast, &fast_frames] {
+        let (_, err) = run_ok(&[
+            "blend",
+            "--rig",
+            s(&rig),
+            "--weights-file",
+            s(&weights),
+            "--interactive",
+            "--out",
+            s(o),
+            "--report",
+            s(&fast_report),
+        ]);
+        assert!(err.contains("welded"), "{err}");
+    }
+    let report: Value = serde_json::from_str(&std::fs::read_to_string(&fast_report).unwrap())
+        .expect("the report is JSON");
+    assert_eq!(report["method"], "interactive", "{report}");
+    for k in 0..5 {
+        let got = read(&fast_frames.join(format!("frame_{k:04}.obj"))).0;
+        let want = read(&frames.join(format!("frame_{k:04}.obj"))).0;
+        assert_eq!(got.len(), want.len(), "frame {k}: the exported vertices");
+        let e = got
+            .iter()
+            .zip(&want)
+            .map(|(g, w)| dist(*g, *w))
+            .fold(0.0, f64::max)
+            / diag;
+        let estimate = report["frames"][k]["solver"]["error_estimate"]
+            .as_f64()
+            .unwrap_or_else(|| panic!("frame {k}: no estimate in {report}"));
+        assert!(
+            e <= 1e-3,
+            "frame {k}: {e} of the diagonal from the full solve"
+        );
+        assert!(
+            e <= estimate.max(1e-12),
+            "frame {k}: {e} over its estimate {estimate}"
+        );
+    }
+    let got_fast = fixture::json_of(&fast);
+    assert_eq!(carried_part(&got_fast), carried_part(&input));
+    fixture::assert_valid(&[&fast]);
     // Blender imports it, shape keys and clip included, its last frame the last OBJ frame.
     let last = frames.join("frame_0004.obj");
     let text = blender("import_glb.py", &[s(&out), s(&last)]);

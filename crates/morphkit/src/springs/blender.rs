@@ -341,7 +341,12 @@ impl PhysicalBlend {
     pub fn interactive_bytes(&self) -> Option<Vec<u8>> {
         let space = self.interactive.as_ref()?;
         let sizes = self.cache_sizes();
-        Some(encode(space, &self.rig.samples, self.rig.cache_key(), sizes))
+        Some(encode(
+            space,
+            &self.rig.samples,
+            self.rig.cache_key(),
+            sizes,
+        ))
     }
 
     /// Takes a preparation saved by [`interactive_bytes`](Self::interactive_bytes): the same

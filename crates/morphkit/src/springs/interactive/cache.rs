@@ -15,8 +15,8 @@
 
 use super::{InteractiveSpace, Snapshot};
 use crate::mesh::Point;
-use crate::springs::sampled_start::{Field, StartSamples, SAMPLES};
 use crate::springs::rig::Rig;
+use crate::springs::sampled_start::{Field, StartSamples, SAMPLES};
 use crate::springs::terms::EnergyTerm;
 use crate::springs::BlendError;
 
@@ -97,7 +97,13 @@ pub(in crate::springs) fn encode(
     let mut out = Vec::with_capacity(72 + 8 * n + per * space.snapshots.len() + fields);
     out.extend_from_slice(MAGIC);
     let word = |out: &mut Vec<u8>, w: u64| out.extend_from_slice(&w.to_le_bytes());
-    for w in [key, n as u64, nf as u64, nv as u64, space.unconverged as u64] {
+    for w in [
+        key,
+        n as u64,
+        nf as u64,
+        nv as u64,
+        space.unconverged as u64,
+    ] {
         word(&mut out, w);
     }
     word(&mut out, space.diagonal.to_bits());
