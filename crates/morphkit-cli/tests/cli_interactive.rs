@@ -85,6 +85,14 @@ fn interactive_frames_are_within_their_estimate_and_the_cache_is_reused() {
             assert_eq!(estimate, 0.0, "frame {k} is one-hot");
         }
     }
+    // Interactive frames are judged by their estimate, not the gradient tolerance: no
+    // unconverged region, and the frames named uncertain are those estimated over 1e-3.
+    assert!(!d.join("fast-unconverged.ply").exists());
+    assert_eq!(r["unconverged_frames"], serde_json::json!([]), "{r}");
+    let over: Vec<usize> = (0..5)
+        .filter(|&k| r["frames"][k]["solver"]["error_estimate"].as_f64().unwrap() > 1e-3)
+        .collect();
+    assert_eq!(r["interactive_uncertain_frames"], serde_json::json!(over), "{r}");
     // Again with the cache: read, not prepared, and the same bytes.
     let (again, ra) = (d.join("again"), d.join("again.json"));
     ok(&refs(&args(&again, &ra)));
