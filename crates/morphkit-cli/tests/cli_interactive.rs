@@ -92,7 +92,11 @@ fn interactive_frames_are_within_their_estimate_and_the_cache_is_reused() {
     let over: Vec<usize> = (0..5)
         .filter(|&k| r["frames"][k]["solver"]["error_estimate"].as_f64().unwrap() > 1e-3)
         .collect();
-    assert_eq!(r["interactive_uncertain_frames"], serde_json::json!(over), "{r}");
+    assert_eq!(
+        r["interactive_uncertain_frames"],
+        serde_json::json!(over),
+        "{r}"
+    );
     // Again with the cache: read, not prepared, and the same bytes.
     let (again, ra) = (d.join("again"), d.join("again.json"));
     ok(&refs(&args(&again, &ra)));
