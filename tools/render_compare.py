@@ -37,13 +37,11 @@ def read_obj(path):
 
 def draw(ax, v, f, colour, lo, hi, elev, azim):
     tri = v[f]
-    shade = np.abs(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]))
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     n /= np.linalg.norm(n, axis=1, keepdims=True) + 1e-300
     e, a = np.radians(elev), np.radians(azim)
     view = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
     light = 0.35 + 0.65 * np.abs(n @ view)
-    del shade
     faces = colour[f].mean(axis=1) * light[:, None]
     ax.add_collection3d(
         Poly3DCollection(tri, facecolors=np.clip(faces, 0, 1), edgecolors="none")

@@ -19,21 +19,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
+from render_compare import read_obj  # noqa: E402  (same folder)
 
 AROUND = 12  # vertices per ring of the generated tube (tests/common/tail.rs)
-
-
-def read_obj(path):
-    v, f = [], []
-    for line in Path(path).read_text().splitlines():
-        p = line.split()
-        if not p:
-            continue
-        if p[0] == "v":
-            v.append([float(x) for x in p[1:4]])
-        elif p[0] == "f":
-            f.append([int(x.split("/")[0]) - 1 for x in p[1:4]])
-    return np.array(v), np.array(f)
 
 
 def normals(v, f):

@@ -143,19 +143,17 @@ fn an_artists_textured_two_material_export_blends_closed_and_comes_back_whole() 
 
     let weights = d.join("keys.csv");
     std::fs::write(&weights, "bend\n0\n0.25\n0.5\n0.75\n1\n").unwrap();
+    let blend_rig = |extra: &[&str], o: &Path| {
+        let mut args = vec!["blend", "--rig", s(&rig), "--weights-file", s(&weights)];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", s(o)]);
+        let (_, err) = run_ok(&args);
+        assert!(err.contains("welded"), "{err}");
+    };
     let out = d.join("physical.glb");
     let frames = d.join("frames");
     for o in [&out, &frames] {
-        let (_, err) = run_ok(&[
-            "blend",
-            "--rig",
-            s(&rig),
-            "--weights-file",
-            s(&weights),
-            "--out",
-            s(o),
-        ]);
-        assert!(err.contains("welded"), "{err}");
+        blend_rig(&[], o);
     }
     // The split, two-primitive export equals the blend of the same mesh unsplit: the
     // cylinder's connectivity with the exported (f32) positions of base and target (frames 0
@@ -223,19 +221,7 @@ fn an_artists_textured_two_material_export_blends_closed_and_comes_back_whole() 
         d.join("interactive.json"),
     );
     for o in [&fast, &fast_frames] {
-        let (_, err) = run_ok(&[
-            "blend",
-            "--rig",
-            s(&rig),
-            "--weights-file",
-            s(&weights),
-            "--interactive",
-            "--out",
-            s(o),
-            "--report",
-            s(&fast_report),
-        ]);
-        assert!(err.contains("welded"), "{err}");
+        blend_rig(&["--interactive", "--report", s(&fast_report)], o);
     }
     let report: Value = serde_json::from_str(&std::fs::read_to_string(&fast_report).unwrap())
         .expect("the report is JSON");
