@@ -79,7 +79,7 @@ impl StartSamples {
 
     /// Whether field `k` of target `s` has been computed (converged or not).
     pub fn is_computed(&self, s: usize, k: usize) -> bool {
-        self.cells[s - 1][k].get().is_some()
+        self.computed(s, k).is_some()
     }
 
     /// Field `k` of target `s` where it has been computed (`None` where not yet).

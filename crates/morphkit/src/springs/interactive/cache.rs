@@ -83,7 +83,6 @@ impl Fnv {
     }
 }
 
-/// The bytes of `space`, prepared for the rig with key `key`.
 /// The bytes of `space` and of the start's fields `samples`, prepared for the rig with key
 /// `key`, `n` shapes, `nf` free coordinates and `nv` vertices.
 pub(in crate::springs) fn encode(

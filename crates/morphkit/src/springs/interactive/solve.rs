@@ -26,11 +26,9 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// Columns $D$ (free coordinates, zero on held ones), the first quasi-Newton matrix over
-/// them (before the change of basis), and `T` with $D T$ orthonormal.
+/// Columns $D$ (free coordinates, zero on held ones) and `T` with $D T$ orthonormal.
 struct Subspace {
     columns: Vec<Vec<f64>>,
-    hessian: DMatrix<f64>,
     t: DMatrix<f64>,
 }
 
@@ -49,22 +47,18 @@ impl Subspace {
         }
     }
 
-    /// The reduced matrix $T^\top D^\top H D\, T$ (symmetrized).
-    fn matrix(&self) -> DMatrix<f64> {
-        let k = self.t.transpose() * &self.hessian * &self.t;
+    /// The reduced matrix $T^\top (D^\top H D)\, T$ (symmetrized), given `hessian` $= D^\top H D$.
+    fn matrix(&self, hessian: &DMatrix<f64>) -> DMatrix<f64> {
+        let k = self.t.transpose() * hessian * &self.t;
         (&k + k.transpose()) * 0.5
     }
 
-    /// The space of `columns`, with no matrix yet.
+    /// The space of `columns`.
     fn new(columns: Vec<Vec<f64>>) -> Self {
         let m = columns.len();
         let gram = DMatrix::from_fn(m, m, |i, j| dot(&columns[i], &columns[j]));
         let t = orthonormalizer(&gram);
-        Self {
-            columns,
-            hessian: DMatrix::zeros(m, m),
-            t,
-        }
+        Self { columns, t }
     }
 
     /// $D^\top H D$ for the matrix `h` (values over `system`'s pattern).
@@ -183,11 +177,10 @@ impl Rig {
                         d
                     })
                     .collect();
-                let mut sub = Subspace::new(columns);
+                let sub = Subspace::new(columns);
                 // The first quasi-Newton matrix: the projected Hessian at the start.
                 self.projected_hessian(ws, terms, params, &frame.held, &x);
-                sub.hessian = sub.products(system, &ws.projected);
-                let mut b = sub.matrix();
+                let mut b = sub.matrix(&sub.products(system, &ws.projected));
                 let mut step = vec![0.0; nf];
                 let mut gr = sub.reduce(&gf);
                 while stats.newton_iterations < MAX_ITERATIONS && sub.t.ncols() > 0 {
