@@ -291,13 +291,8 @@ impl PhysicalBlend {
             }
             let diagonal = crate::mesh::bbox_diagonal(self.rig.shapes.positions(0));
             let targets = self.rig.shapes.len() - 1;
-            let mut space = InteractiveSpace {
-                snapshots,
-                checked: vec![0.0; targets],
-                unconverged,
-                diagonal,
-                prepare_seconds: 0.0,
-            };
+            let mut space =
+                InteractiveSpace::new(snapshots, vec![0.0; targets], unconverged, diagonal, 0.0);
             // The error estimate's data: each combination left out, each target checked
             // between its snapshots.
             let indices: Vec<usize> = (0..space.len()).collect();

@@ -224,13 +224,7 @@ pub(in crate::springs) fn decode(
             bytes.len() - r.at
         )));
     }
-    let space = InteractiveSpace {
-        snapshots,
-        checked,
-        unconverged,
-        diagonal,
-        prepare_seconds,
-    };
+    let space = InteractiveSpace::new(snapshots, checked, unconverged, diagonal, prepare_seconds);
     Ok((space, fields))
 }
 
