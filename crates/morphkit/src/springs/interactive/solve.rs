@@ -31,7 +31,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// $D$ is stored transposed (`m × nf`, so that the `m` column values of one coordinate are
 /// contiguous): every product with it is one pass over `nf` coordinates, and the projected
 /// Hessian's products with all columns read the matrix once. Measured on the ICT rig (15
-/// columns, 80k coordinates): products 26 → 6 ms per slider change.
+/// columns, 80k coordinates, probe runs): products 26 → 17 ms per slider change.
 struct Subspace {
     d: DMatrix<f64>,
     t: DMatrix<f64>,
