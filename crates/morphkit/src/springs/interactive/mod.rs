@@ -59,8 +59,8 @@ pub struct InteractiveSpace {
     /// Seconds the preparation took (reported only).
     pub prepare_seconds: f64,
     /// The snapshots' Gram matrix $d_i \cdot d_j$ (`len × len`), so that a slider change
-    /// takes its columns' from it instead of a pass over the coordinates per pair (ICT: 6 ms
-    /// per change).
+    /// takes its columns' entries from it instead of a pass over the coordinates per pair
+    /// (ICT: about 6 ms per change).
     pub(super) gram: DMatrix<f64>,
 }
 

@@ -13,7 +13,7 @@ use crate::springs::terms::{
     total_energy, total_gradient, EnergyTerm, Held, HessianKind, TermParameters,
 };
 use crate::springs::BlendError;
-use nalgebra::{DMatrix, DVector, DVectorView};
+use nalgebra::{DMatrix, DVector, DVectorView, DVectorViewMut};
 use std::time::Instant;
 
 /// Most quasi-Newton iterations of one interactive solve.
@@ -45,8 +45,8 @@ impl Subspace {
 
     fn expand(&self, y: &DVector<f64>, out: &mut [f64]) {
         let raw = &self.t * y;
-        let full = self.d.tr_mul(&raw);
-        out.copy_from_slice(full.as_slice());
+        let n = out.len();
+        DVectorViewMut::from_slice(out, n).gemv_tr(1.0, &self.d, &raw, 0.0);
     }
 
     /// The reduced matrix $T^\top (D^\top H D)\, T$ (symmetrized), given `hessian` $= D^\top H D$.
@@ -150,7 +150,6 @@ impl Rig {
         let started = Instant::now();
         let frame = self.frame_energy(c, &[], true, false);
         let mut x = self.start_of(ws, c, Start::Canonical, &frame)?;
-
         let cols = space.columns(c, exclude);
         let mut stats = FrameStats {
             gradient_tolerance: self.tolerance,
