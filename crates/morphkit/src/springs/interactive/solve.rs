@@ -13,7 +13,7 @@ use crate::springs::terms::{
     total_energy, total_gradient, EnergyTerm, Held, HessianKind, TermParameters,
 };
 use crate::springs::BlendError;
-use nalgebra::{DMatrix, DVector, DVectorView, DVectorViewMut};
+use nalgebra::{DMatrix, DMatrixView, DVector, DVectorView, DVectorViewMut, Dyn};
 use std::time::Instant;
 
 /// Most quasi-Newton iterations of one interactive solve.
@@ -82,7 +82,19 @@ impl Subspace {
         system
             .pattern
             .mul_rows_into(h, m, self.d.as_slice(), hd.as_mut_slice());
-        &self.d * hd.transpose()
+        // (H D)ᵀ read in place (a strided view of `hd`): a transposed copy of it took 4 of
+        // the 6 ms of this product on the ICT rig.
+        let nf = self.d.ncols();
+        let hd_t = DMatrixView::from_slice_with_strides_generic(
+            hd.as_slice(),
+            Dyn(nf),
+            Dyn(m),
+            Dyn(m),
+            Dyn(1),
+        );
+        let mut out = DMatrix::zeros(m, m);
+        out.gemm(1.0, &self.d, &hd_t, 0.0);
+        out
     }
 }
 

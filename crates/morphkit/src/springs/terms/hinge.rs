@@ -295,30 +295,84 @@ impl HingeTerm {
     }
 
     /// Residual ρ of hinge `k` at `x` and the gradient blocks $J_u^\top \rho$ of
-    /// $\lVert\rho\rVert^2 / 2$ per corner, without forming $J$ (the transposes of the blocks in
-    /// [`Self::residual_at`] applied to ρ: $[w]_\times^\top \rho = \rho \times w$).
+    /// $\lVert\rho\rVert^2 / 2$ per corner ([`pullback`]).
+    #[cfg(test)]
     fn residual_pullback(
         &self,
         p: &[f64],
         x: &[f64],
         k: usize,
     ) -> (Vector3<f64>, [Vector3<f64>; 4]) {
-        let pos = self.hinges[k].map(|v| v3(x, v));
-        let [a, b, c, d] = pos;
-        let l = self.local(p, k, pos);
-        let r = l.rho(d - a);
-        let (cs, sn, ib1, ib2, e, eh, n1) = (l.cs, l.sn, l.ib1, l.ib2, l.e, l.eh, l.n1);
-        // R(Θ̄)[w]×, transposed, applied to r.
-        let rot_t = |w: Vector3<f64>| r.cross(&w) * cs + (eh * w.dot(&r) - r * eh.dot(&w)) * sn;
-        let np_t = (r.cross(&n1) - eh * n1.cross(&eh).dot(&r)) * (sn / l.le);
-        let g = [
-            r.cross(&(b - d)) * ib2 - (rot_t(c - b) + np_t) * ib1,
-            r.cross(&(d - a)) * ib2 + (rot_t(c - a) + np_t) * ib1,
-            -rot_t(e) * ib1,
-            -r.cross(&e) * ib2,
-        ];
-        (r, g)
+        let (r, g) = pullback(&p[4 * k..4 * k + 4], self.hinges[k].map(|v| p3(x, v)));
+        (r.into(), g.map(Vector3::from))
     }
+}
+
+type P3 = [f64; 3];
+
+#[inline(always)]
+fn p3(x: &[f64], i: u32) -> P3 {
+    let i = 3 * i as usize;
+    [x[i], x[i + 1], x[i + 2]]
+}
+
+#[inline(always)]
+fn cross(a: P3, b: P3) -> P3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[inline(always)]
+fn dot(a: P3, b: P3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// `f` applied to each coordinate.
+#[inline(always)]
+fn each(f: impl Fn(usize) -> f64) -> P3 {
+    [f(0), f(1), f(2)]
+}
+
+/// ρ of one hinge with parameters `q` $= [\cos\bar\Theta, \sin\bar\Theta, \beta_1^{-1},
+/// \beta_2^{-1}]$ at corners `[a, b, c, d]`, and the gradient of $\lVert\rho\rVert^2/2$ per
+/// corner, by reverse-mode differentiation of the module doc's definition: with $u_1 = c - a$,
+/// $u_2 = d - a$, $n_1 = e \times u_1$, $n_2 = u_2 \times e$, $t = \hat e \times n_1$ and
+/// $\rho = \beta_2^{-1} n_2 - \beta_1^{-1}(\cos\bar\Theta\, n_1 + \sin\bar\Theta\, t)$, the
+/// adjoints are $\bar n_2 = \beta_2^{-1}\rho$, $\bar m = -\beta_1^{-1}\rho$,
+/// $\bar n_1 = \cos\bar\Theta\, \bar m + \sin\bar\Theta\, \bar m \times \hat e$,
+/// $\bar{\hat e} = \sin\bar\Theta\, n_1 \times \bar m$, then
+/// $\bar e = (I - \hat e \hat e^\top)\bar{\hat e} / \lVert e\rVert + \bar n_2 \times u_2 +
+/// u_1 \times \bar n_1$, $\bar u_1 = \bar n_1 \times e$, $\bar u_2 = e \times \bar n_2$; the
+/// corners get $(-\bar e - \bar u_1 - \bar u_2,\ \bar e,\ \bar u_1,\ \bar u_2)$. It equals
+/// $J_u^\top \rho$ with the blocks of [`HingeTerm::residual_at`] (tested) in about half the
+/// arithmetic (ICT's 80k hinges: 5.7 → 3.6 ms per gradient).
+#[inline(always)]
+fn pullback(q: &[f64], [a, b, c, d]: [P3; 4]) -> (P3, [P3; 4]) {
+    let (cs, sn, ib1, ib2) = (q[0], q[1], q[2], q[3]);
+    let e = each(|i| b[i] - a[i]);
+    let u1 = each(|i| c[i] - a[i]);
+    let u2 = each(|i| d[i] - a[i]);
+    let il = 1.0 / dot(e, e).sqrt().max(f64::MIN_POSITIVE);
+    let eh = each(|i| e[i] * il);
+    let n1 = cross(e, u1);
+    let n2 = cross(u2, e);
+    let t = cross(eh, n1);
+    let r = each(|i| n2[i] * ib2 - (n1[i] * cs + t[i] * sn) * ib1);
+    let gn2 = each(|i| r[i] * ib2);
+    let gm = each(|i| -r[i] * ib1);
+    let gme = cross(gm, eh);
+    let gn1 = each(|i| gm[i] * cs + gme[i] * sn);
+    let geh = cross(n1, gm);
+    let along = dot(eh, geh);
+    let (x2, x1) = (cross(gn2, u2), cross(u1, gn1));
+    let ge = each(|i| (geh[i] - eh[i] * along) * (sn * il) + x2[i] + x1[i]);
+    let gu1 = cross(gn1, e);
+    let gu2 = cross(e, gn2);
+    let ga = each(|i| -(ge[i] + gu1[i] + gu2[i]));
+    (r, [ga, ge, gu1, gu2])
 }
 
 /// What ρ of one hinge and its derivatives share: the blended parameters (cos Θ̄, sin Θ̄,
@@ -462,16 +516,15 @@ impl EnergyTerm for HingeTerm {
 
     fn add_gradient(&self, p: &TermParameters, x: &[f64], g: &mut [f64]) -> f64 {
         let mut e = 0.0;
-        for k in 0..self.hinges.len() {
-            let (rho, jt_rho) = self.residual_pullback(&p.values, x, k);
+        for (k, (h, q)) in self.hinges.iter().zip(p.values.chunks_exact(4)).enumerate() {
+            let (rho, jt_rho) = pullback(q, h.map(|v| p3(x, v)));
             let w = self.weight[k];
-            e += w * rho.norm_squared();
-            for (v, jv) in self.hinges[k].iter().zip(&jt_rho) {
-                let gv = jv * (2.0 * w);
+            e += w * dot(rho, rho);
+            for (v, jv) in h.iter().zip(&jt_rho) {
                 let i = 3 * *v as usize;
-                g[i] += gv.x;
-                g[i + 1] += gv.y;
-                g[i + 2] += gv.z;
+                g[i] += jv[0] * (2.0 * w);
+                g[i + 1] += jv[1] * (2.0 * w);
+                g[i + 2] += jv[2] * (2.0 * w);
             }
         }
         e
