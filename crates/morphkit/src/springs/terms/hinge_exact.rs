@@ -22,13 +22,13 @@ impl HingeTerm {
     /// against differences of the analytic gradient.
     pub(super) fn add_exact_hessian(&self, p: &TermParameters, x: &[f64], h: &mut BlockHessian) {
         let slots = self.slots.get(h);
-        for k in 0..self.hinges.len() {
-            let hv = self.hinges[k];
+        for (k, (&hv, q)) in self.hinges.iter().zip(p.values.chunks_exact(4)).enumerate() {
             let pos = hv.map(|v| v3(x, v));
-            let (r, j) = self.residual_at(&p.values, k, pos);
-            let hy = self.second_order(&p.values, k, pos, &r);
+            let geometry = Geometry::new(q, pos.map(Into::into));
+            let hy = self.second_order(&p.values, k, pos, &geometry.rho().into());
             let sl = slots.map(|s| &s[6 * k..6 * k + 6]);
-            add_block_pairs(None, (h, sl), hv, &j, &hy, 2.0 * self.weight[k]);
+            let rows = geometry.jacobian_rows();
+            add_block_pairs(None, (h, sl), hv, &rows, &hy, 2.0 * self.weight[k]);
         }
     }
 

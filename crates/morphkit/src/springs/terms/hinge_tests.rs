@@ -255,3 +255,91 @@ fn the_gradient_pass_equals_the_jacobian_transposed_times_the_residual() {
     let e = term.energy(&p, &x);
     assert!((e - energy).abs() <= 1e-12 * energy, "{e} vs {energy}");
 }
+
+/// The Jacobian of ρ in matrix form, block by block, written out independently of the
+/// adjoint pass ([`Geometry::pull`]) that the term uses: the oracle it is checked against.
+impl HingeTerm {
+    /// Residual ρ and its Jacobian blocks (∂ρ/∂a, ∂ρ/∂b, ∂ρ/∂c, ∂ρ/∂d).
+    fn residual(&self, p: &[f64], x: &[f64], k: usize) -> (Vector3<f64>, [Matrix3<f64>; 4]) {
+        self.residual_at(p, k, self.hinges[k].map(|v| v3(x, v)))
+    }
+
+    /// The quantities of hinge `k` at corner positions `pos` that ρ and its derivatives share.
+    fn local(&self, p: &[f64], k: usize, [a, b, c, _]: [Vector3<f64>; 4]) -> Local {
+        let (cs, sn, ib1, ib2) = (p[4 * k], p[4 * k + 1], p[4 * k + 2], p[4 * k + 3]);
+        let e = b - a;
+        let le = e.norm().max(f64::MIN_POSITIVE);
+        Local {
+            cs,
+            sn,
+            ib1,
+            ib2,
+            e,
+            le,
+            eh: e / le,
+            n1: e.cross(&(c - a)),
+        }
+    }
+
+    /// Residual and Jacobian of hinge `k` at corner positions `[a, b, c, d]`.
+    fn residual_at(
+        &self,
+        p: &[f64],
+        k: usize,
+        pos: [Vector3<f64>; 4],
+    ) -> (Vector3<f64>, [Matrix3<f64>; 4]) {
+        let [a, b, c, d] = pos;
+        let l = self.local(p, k, pos);
+        let (cs, sn, ib1, ib2, e, eh, n1) = (l.cs, l.sn, l.ib1, l.ib2, l.e, l.eh, l.n1);
+        let rho = l.rho(d - a);
+        // R(Θ̄)[w]× with R = cos Θ̄ I + sin Θ̄ [ê]×, using [ê]×[w]× = w êᵀ − (ê·w) I.
+        let rot_skew = |w: Vector3<f64>| {
+            skew(&w) * cs + (w * eh.transpose() - Matrix3::identity() * eh.dot(&w)) * sn
+        };
+        // sin Θ̄ [n₁]× ∂ê/∂b, with ∂ê/∂b = (I − ê êᵀ)/‖e‖ = −∂ê/∂a.
+        let np = (skew(&n1) - n1.cross(&eh) * eh.transpose()) * (sn / l.le);
+        let j = [
+            skew(&(b - d)) * ib2 - (rot_skew(c - b) + np) * ib1,
+            skew(&(d - a)) * ib2 + (rot_skew(c - a) + np) * ib1,
+            -rot_skew(e) * ib1,
+            -skew(&e) * ib2,
+        ];
+        (rho, j)
+    }
+
+    /// Residual ρ of hinge `k` at `x` and the gradient blocks $J_u^\top \rho$ of
+    /// $\lVert\rho\rVert^2 / 2$ per corner ([`pullback`]).
+    #[cfg(test)]
+    fn residual_pullback(
+        &self,
+        p: &[f64],
+        x: &[f64],
+        k: usize,
+    ) -> (Vector3<f64>, [Vector3<f64>; 4]) {
+        let h = Geometry::new(&p[4 * k..4 * k + 4], self.hinges[k].map(|v| p3(x, v)));
+        let r = h.rho();
+        (r.into(), h.pull(r).map(Vector3::from))
+    }
+}
+
+/// What ρ of one hinge and its derivatives share: the blended parameters (cos Θ̄, sin Θ̄,
+/// 1/β̄₁, 1/β̄₂), the hinge edge `e = b − a`, its length and direction, and $n_1 = e \times (c - a)$.
+#[derive(Clone, Copy)]
+struct Local {
+    cs: f64,
+    sn: f64,
+    ib1: f64,
+    ib2: f64,
+    e: Vector3<f64>,
+    le: f64,
+    eh: Vector3<f64>,
+    n1: Vector3<f64>,
+}
+
+impl Local {
+    /// $\rho = \beta_2^{-1} n_2 - \beta_1^{-1} R(\bar\Theta) n_1$ with $n_2 = u_2 \times e$.
+    fn rho(&self, u2: Vector3<f64>) -> Vector3<f64> {
+        let n2 = u2.cross(&self.e);
+        n2 * self.ib2 - (self.n1 * self.cs + self.eh.cross(&self.n1) * self.sn) * self.ib1
+    }
+}
