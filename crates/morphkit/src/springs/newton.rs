@@ -53,6 +53,9 @@ pub(crate) struct Workspace {
     points: Vec<[f64; 3]>,
     /// The iterate of the last factorization of [`Self::chol`] in the current solve.
     factored_at: Option<Vec<f64>>,
+    /// The interactive mode's reduced-space buffers (`m · nf` values each), kept between
+    /// slider changes: fresh ones cost page faults and zeroing on every change.
+    pub reduced: [Vec<f64>; 2],
 }
 
 impl Workspace {
@@ -69,6 +72,7 @@ impl Workspace {
             aggregation: None,
             points: Vec::new(),
             factored_at: None,
+            reduced: Default::default(),
         }
     }
 

@@ -20,7 +20,7 @@ use std::time::Instant;
 pub const MAX_ITERATIONS: usize = 20;
 
 /// A change stops once a step moves no coordinate by more than this fraction of the diagonal.
-pub const STEP_STOP: f64 = 3e-5;
+pub const STEP_STOP: f64 = 1e-4;
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
@@ -56,15 +56,16 @@ impl Subspace {
     }
 
     /// The space of `space`'s snapshots `cols`, zero on the free coordinates `held`: their
-    /// Gram matrix is the prepared one less the held coordinates' products.
-    fn new(space: &InteractiveSpace, cols: &[usize], held: &[usize]) -> Self {
+    /// Gram matrix is the prepared one less the held coordinates' products. `buffer` becomes
+    /// $D$'s storage ([`Self::into_buffer`] gives it back).
+    fn new(space: &InteractiveSpace, cols: &[usize], held: &[usize], buffer: Vec<f64>) -> Self {
         let m = cols.len();
         let nf = space.snapshots.first().map_or(0, |s| s.d.len());
         let columns: Vec<&[f64]> = cols.iter().map(|&k| &space.snapshots[k].d[..]).collect();
-        let mut d = DMatrix::zeros(m, nf);
-        for (i, row) in d.as_mut_slice().chunks_exact_mut(m).enumerate() {
-            row.iter_mut().zip(&columns).for_each(|(o, c)| *o = c[i]);
-        }
+        let mut values = buffer;
+        values.clear();
+        values.extend((0..nf).flat_map(|i| columns.iter().map(move |c| c[i])));
+        let mut d = DMatrix::from_vec(m, nf, values);
         let mut gram = DMatrix::from_fn(m, m, |i, j| space.gram[(cols[i], cols[j])]);
         for &h in held {
             let row = d.column(h).clone_owned();
@@ -75,23 +76,23 @@ impl Subspace {
         Self { d, t }
     }
 
-    /// $D^\top H D$ for the matrix `h` (values over `system`'s pattern).
-    fn products(&self, system: &FreeSystem, h: &[f64]) -> DMatrix<f64> {
-        let m = self.d.nrows();
-        let mut hd = DMatrix::<f64>::zeros(m, self.d.ncols());
+    /// $D$'s storage, for the next change.
+    fn into_buffer(self) -> Vec<f64> {
+        self.d.data.into()
+    }
+
+    /// $D^\top H D$ for the matrix `h` (values over `system`'s pattern), with `scratch` for
+    /// $H D$.
+    fn products(&self, system: &FreeSystem, h: &[f64], scratch: &mut Vec<f64>) -> DMatrix<f64> {
+        let (m, nf) = self.d.shape();
+        scratch.resize(m * nf, 0.0);
         system
             .pattern
-            .mul_rows_into(h, m, self.d.as_slice(), hd.as_mut_slice());
-        // (H D)ᵀ read in place (a strided view of `hd`): a transposed copy of it took 4 of
-        // the 6 ms of this product on the ICT rig.
-        let nf = self.d.ncols();
-        let hd_t = DMatrixView::from_slice_with_strides_generic(
-            hd.as_slice(),
-            Dyn(nf),
-            Dyn(m),
-            Dyn(m),
-            Dyn(1),
-        );
+            .mul_rows_into(h, m, self.d.as_slice(), scratch);
+        // (H D)ᵀ read in place (a strided view): a transposed copy took 4 of the 6 ms of
+        // this product on the ICT rig.
+        let hd_t =
+            DMatrixView::from_slice_with_strides_generic(scratch, Dyn(nf), Dyn(m), Dyn(m), Dyn(1));
         let mut out = DMatrix::zeros(m, m);
         out.gemm(1.0, &self.d, &hd_t, 0.0);
         out
@@ -191,10 +192,12 @@ impl Rig {
             let mut trial = x.clone();
             if !cols.is_empty() {
                 // Held coordinates do not move.
-                let sub = Subspace::new(space, &cols, &held_free);
+                let buffer = std::mem::take(&mut ws.reduced[0]);
+                let sub = Subspace::new(space, &cols, &held_free, buffer);
                 // The first quasi-Newton matrix: the projected Hessian at the start.
                 self.projected_hessian(ws, terms, params, &frame.held, &x);
-                let mut b = sub.matrix(&sub.products(system, &ws.projected));
+                let hd = sub.products(system, &ws.projected, &mut ws.reduced[1]);
+                let mut b = sub.matrix(&hd);
                 let mut step = vec![0.0; nf];
                 let mut gr = sub.reduce(&gf);
                 while stats.newton_iterations < MAX_ITERATIONS && sub.t.ncols() > 0 {
@@ -236,19 +239,22 @@ impl Rig {
                     gr = gn;
                     let decrease = e - e_new;
                     e = e_new;
-                    // Done when a step moves no coordinate by more than 3·10⁻⁵ of the
-                    // diagonal (a thirtieth of the 10⁻³ the shape is held to) or the energy
+                    // Done when a step moves no coordinate by more than 10⁻⁴ of the
+                    // diagonal (a tenth of the 10⁻³ the shape is held to) or the energy
                     // stops decreasing beyond round-off. Horse: 10⁻⁹ → 10⁻⁶ took 7–8
                     // iterations to 4–5. ICT, the twelve three-expression changes of the scrub
                     // bench: 10⁻⁶ → 10⁻⁵ took the median from 11.5 to 8.5 iterations and from
                     // 174 to 147 ms; 10⁻⁵ → 3·10⁻⁵ from 8.5 to 6.5 iterations and 136 to
                     // 110 ms (probe runs), every distance from the full solve the same to
-                    // 0.013 % of the diagonal (horse: to 0.001 %).
+                    // 0.013 % of the diagonal (horse: to 0.001 %); 3·10⁻⁵ → 10⁻⁴ from 84 to
+                    // 67 iterations in all (horse: 54 to 47), distances the same to 0.007 %
+                    // (horse: 0.004 %).
                     let moved = step.iter().fold(0.0f64, |m, v| m.max(v.abs())) * a;
                     if moved <= STEP_STOP * space.diagonal || decrease <= 1e-13 * e.abs() {
                         break;
                     }
                 }
+                ws.reduced[0] = sub.into_buffer();
             }
             for _ in 0..refine {
                 // A projected-Newton step with this frame's own factor: its length is the
@@ -374,7 +380,7 @@ mod tests {
         let space = InteractiveSpace::new(snapshots, vec![0.0], 0, 1.0, 0.0);
         let cols = [0, 1, 2, 4];
         let held: Vec<usize> = (0..nf).step_by(97).collect();
-        let sub = Subspace::new(&space, &cols, &held);
+        let sub = Subspace::new(&space, &cols, &held, Vec::new());
         assert_eq!(sub.t.ncols(), 3, "the combination adds no direction");
         // D is the snapshots' values, zero on held coordinates.
         for (j, &k) in cols.iter().enumerate() {
