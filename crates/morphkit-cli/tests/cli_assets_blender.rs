@@ -10,7 +10,8 @@
 //! - Blender imports the result: one object with the shape keys, and its last animation frame
 //!   equal to the last OBJ frame;
 //! - `--interactive` on the same export (issue 38): welded alike, each frame within 1e-3 of the
-//!   diagonal of the full solve's and within its own error estimate, the asset back whole.
+//!   diagonal of the full solve's and within its own error estimate, the asset back whole, and
+//!   Blender imports it the same way.
 //!
 //! Skipped without `blender` or `MORPHKIT_DATA`, unless MORPHKIT_REQUIRE_BLENDER is set (CI),
 //! and failing when MORPHKIT_DATA is set but a file is missing.
@@ -251,19 +252,22 @@ fn an_artists_textured_two_material_export_blends_closed_and_comes_back_whole() 
     let got_fast = fixture::json_of(&fast);
     assert_eq!(carried_part(&got_fast), carried_part(&input));
     fixture::assert_valid(&[&fast]);
-    // Blender imports it, shape keys and clip included, its last frame the last OBJ frame.
-    let last = frames.join("frame_0004.obj");
-    let text = blender("import_glb.py", &[s(&out), s(&last)]);
-    let line = text
-        .lines()
-        .find(|l| l.starts_with("BLENDER "))
-        .unwrap_or_else(|| panic!("no result line: {text}"));
-    assert!(line.contains("1 mesh objects, 6 shape keys"), "{line}");
-    let err: f64 = line
-        .rsplit(' ')
-        .next()
-        .and_then(|x| x.parse().ok())
-        .unwrap_or_else(|| panic!("no error in {line}"));
-    assert!(err < 1e-6 * diag, "{line}");
+    // Blender imports both, shape keys and clip included, the last frame of each the last
+    // OBJ frame of the same mode.
+    for (asset, objs) in [(&out, &frames), (&fast, &fast_frames)] {
+        let last = objs.join("frame_0004.obj");
+        let text = blender("import_glb.py", &[s(asset), s(&last)]);
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("BLENDER "))
+            .unwrap_or_else(|| panic!("{}: no result line: {text}", asset.display()));
+        assert!(line.contains("1 mesh objects, 6 shape keys"), "{line}");
+        let err: f64 = line
+            .rsplit(' ')
+            .next()
+            .and_then(|x| x.parse().ok())
+            .unwrap_or_else(|| panic!("no error in {line}"));
+        assert!(err < 1e-6 * diag, "{}: {line}", asset.display());
+    }
     let _ = std::fs::remove_dir_all(&d);
 }
