@@ -23,33 +23,24 @@ impl HingeTerm {
     pub(super) fn add_exact_hessian(&self, p: &TermParameters, x: &[f64], h: &mut BlockHessian) {
         let slots = self.slots.get(h);
         for (k, (&hv, q)) in self.hinges.iter().zip(p.values.chunks_exact(4)).enumerate() {
-            let pos = hv.map(|v| v3(x, v));
-            let geometry = Geometry::new(q, pos.map(Into::into));
-            let hy = self.second_order(&p.values, k, pos, &geometry.rho().into());
+            let geometry = Geometry::new(q, hv.map(|v| p3(x, v)));
+            let hy = Self::second_order(&geometry, &geometry.rho().into());
             let sl = slots.map(|s| &s[6 * k..6 * k + 6]);
             let rows = geometry.jacobian_rows();
             add_block_pairs(None, (h, sl), hv, &rows, &hy, 2.0 * self.weight[k]);
         }
     }
 
-    /// The second-order blocks $H_y$ of hinge `k` in the edge variables (see
-    /// [`Self::add_exact_hessian`]), for residual `r` at corner positions `pos`.
-    pub(super) fn second_order(
-        &self,
-        p: &[f64],
-        k: usize,
-        pos: [Vector3<f64>; 4],
-        r: &Vector3<f64>,
-    ) -> [[Matrix3<f64>; 3]; 3] {
+    /// The second-order blocks $H_y$ of one hinge in the edge variables (see
+    /// [`Self::add_exact_hessian`]), for residual `r` at its `geometry`.
+    pub(super) fn second_order(geometry: &Geometry, r: &Vector3<f64>) -> [[Matrix3<f64>; 3]; 3] {
         let id = Matrix3::<f64>::identity();
         // d enters only through u2 = d − a, whose blocks are constant.
-        let [a, b, c, _] = pos;
-        let pv = &p[4 * k..4 * k + 4];
-        let (cs, sn, ib1, ib2) = (pv[0], pv[1], pv[2], pv[3]);
-        let (e, u1) = (b - a, c - a);
-        let le = e.norm().max(f64::MIN_POSITIVE);
-        let eh = e / le;
-        let n1 = e.cross(&u1);
+        let [cs, sn, ib1, ib2] = geometry.q;
+        let (e, u1) = (Vector3::from(geometry.e), Vector3::from(geometry.u1));
+        let le = geometry.le;
+        let eh = Vector3::from(geometry.eh);
+        let n1 = Vector3::from(geometry.n1);
         // Second derivatives in (e, u1, u2): hy[p][q] = ∂²f/∂p∂q.
         let mut hy = [[Matrix3::<f64>::zeros(); 3]; 3];
         let (sr, ss) = (skew(r), skew(&r.cross(&eh)));

@@ -309,7 +309,6 @@ impl HingeTerm {
 
     /// Residual ρ of hinge `k` at `x` and the gradient blocks $J_u^\top \rho$ of
     /// $\lVert\rho\rVert^2 / 2$ per corner ([`pullback`]).
-    #[cfg(test)]
     fn residual_pullback(
         &self,
         p: &[f64],
