@@ -52,7 +52,8 @@ node "$here/check.mjs" --tol 1e-4 --shots "$out/shots" "$out/tube2100-packed.glb
 # its own vertices) with a UV map, a material and a shape key, and again smooth with Smart UV
 # Project seams and two materials, one with an image texture (two primitives); `blend --rig`
 # solves each welded and adds the physical clip to that asset, which three.js plays key by key
-# like the OBJ frames of the same blend (the textured one's shots show the texture). Needs
+# like the OBJ frames of the same blend (the textured one's shots show the texture), and so
+# does the textured asset's `--interactive` clip. Needs
 # Blender (CI installs it); skipped with a message without it.
 if command -v blender >/dev/null 2>&1; then
   # The cylinder's OBJ faces name texture coordinates the file does not have, and Blender's
@@ -70,8 +71,15 @@ if command -v blender >/dev/null 2>&1; then
     "$bin" blend --rig "$out/$mode-rig.glb" --weights-file "$out/artist-weights.csv" \
       --out "$out/$mode-physical" --force
   done
+  # The interactive mode (issue 38) on the textured asset: the clip a TD bakes from the slider
+  # previews plays like the OBJ frames of the same interactive blend.
+  "$bin" blend --rig "$out/artist-rig.glb" --weights-file "$out/artist-weights.csv" \
+    --interactive --out "$out/artist-interactive.glb" --force
+  "$bin" blend --rig "$out/artist-rig.glb" --weights-file "$out/artist-weights.csv" \
+    --interactive --out "$out/artist-interactive" --force
   node "$here/check.mjs" --shots "$out/shots" "$out/flat-physical.glb" "$out/flat-physical" \
-    "$out/artist-physical.glb" "$out/artist-physical" | tee -a "$out/results.jsonl"
+    "$out/artist-physical.glb" "$out/artist-physical" \
+    "$out/artist-interactive.glb" "$out/artist-interactive" | tee -a "$out/results.jsonl"
 else
   echo "threejs-check: no blender on the PATH; the artist's-asset check is skipped" >&2
 fi

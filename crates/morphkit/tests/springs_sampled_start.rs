@@ -1,8 +1,8 @@
 //! The sampled start (`BlendOptions::sampled_start`): frames start from the predictor
-//! corrected by each target's equilibria at ¼, ½, ¾. It must reach the equilibrium the plain
-//! predictor reaches (within the tolerance), with fewer iterations, and stay a function of the
-//! weights alone: samples computed lazily by one solve or in parallel by `solve_many` give the
-//! same bits.
+//! corrected by each target's equilibria at ¼, ½, ¾, and where targets combine, by each pair's
+//! equilibrium at (½, ½). It must reach the equilibrium the plain predictor reaches (within
+//! the tolerance), with fewer iterations, and stay a function of the weights alone: samples
+//! computed lazily by one solve or in parallel by `solve_many` give the same bits.
 
 mod common;
 
@@ -97,9 +97,40 @@ fn lazy_and_prepared_samples_give_the_same_bits() {
     assert_eq!(many.start_samples_solved(), one.start_samples_solved());
     assert_eq!(
         many.start_samples_solved(),
-        6,
-        "both targets' three samples"
+        7,
+        "both targets' three samples and their pair's field"
     );
+}
+
+/// Combinations of both targets read the pair's field: at (½, ½) the start is the pair's
+/// equilibrium (no iteration left), and elsewhere the same equilibrium as the plain start's is
+/// reached in fewer iterations.
+#[test]
+fn combinations_start_from_the_pairs_equilibrium() {
+    let s = bar_rig();
+    let d = bbox_diagonal(s.positions(0));
+    let mut sampled = PhysicalBlend::new(&s, &options(true)).unwrap();
+    let mut plain = PhysicalBlend::new(&s, &options(false)).unwrap();
+    let half = sampled.solve(&Weights::Delta(vec![0.5, 0.5])).unwrap();
+    assert!(half.stats.converged && half.stats.newton_iterations == 0);
+    assert_eq!(
+        sampled.start_samples_solved(),
+        3,
+        "two ½ samples and the pair"
+    );
+    let (mut n_sampled, mut n_plain) = (0, 0);
+    for (a, b) in [(0.3, 0.3), (0.6, 0.2), (0.2, 0.7), (0.45, 0.5)] {
+        let w = Weights::Delta(vec![a, b]);
+        let x = sampled.solve(&w).unwrap();
+        let y = plain.solve(&w).unwrap();
+        assert!(x.stats.converged && y.stats.converged, "({a}, {b})");
+        let gap = max_dist(&x.positions, &y.positions);
+        assert!(gap <= 1e-5 * d, "({a}, {b}): {gap:e} of {d}");
+        n_sampled += x.stats.newton_iterations;
+        n_plain += y.stats.newton_iterations;
+    }
+    eprintln!("Newton iterations over 4 combinations: sampled {n_sampled}, plain {n_plain}");
+    assert!(n_sampled < n_plain, "{n_sampled} vs {n_plain}");
 }
 
 /// A sample that does not converge turns its target's correction off: the frame starts from

@@ -233,7 +233,7 @@ pub fn blend(
 impl PhysicalBlend {
     /// Computes the [sampled start](super::sampled_start)'s fields that solves for `weights`
     /// will read, spread over up to `threads` threads (the ½ samples first, then the others,
-    /// which start from them). A solve computes what it lacks itself; this only lets the
+    /// which start from them, then the pairs' fields). A solve computes what it lacks itself; this only lets the
     /// samples run in parallel instead of one after another inside the first frames. Invalid
     /// weights are skipped (their solves report them).
     pub fn prepare(&mut self, weights: &[Weights], threads: usize) {
@@ -242,15 +242,23 @@ impl PhysicalBlend {
         }
         let n = self.rig.shapes.len();
         let samples = &self.rig.samples;
-        let mut missing: Vec<(usize, usize)> = weights
+        let coefficients: Vec<Vec<f64>> = weights
             .iter()
             .filter_map(|w| w.coefficients(n).ok())
-            .flat_map(|c| StartSamples::needed(&c).collect::<Vec<_>>())
+            .collect();
+        let mut pairs: Vec<(usize, usize)> = coefficients
+            .iter()
+            .flat_map(|c| StartSamples::needed_pairs(c))
+            .filter(|&(s, t)| samples.pair_computed(s, t).is_none())
+            .collect();
+        pairs.sort_unstable();
+        pairs.dedup();
+        let mut missing: Vec<(usize, usize)> = coefficients
+            .iter()
+            .flat_map(|c| StartSamples::needed(c).collect::<Vec<_>>())
+            .chain(pairs.iter().flat_map(|&(s, t)| [(s, 1), (t, 1)]))
             .filter(|&(s, k)| !samples.is_computed(s, k))
             .collect();
-        if missing.is_empty() {
-            return;
-        }
         missing.sort_unstable();
         missing.dedup();
         let mut halves: Vec<(usize, usize)> = missing.iter().map(|&(s, _)| (s, 1)).collect();
@@ -262,6 +270,11 @@ impl PhysicalBlend {
         };
         self.map_frames(&halves, threads, field);
         self.map_frames(&sides, threads, field);
+        // The pairs last: each starts from its two targets' ½ fields.
+        self.map_frames(&pairs, threads, |f, &(s, t)| {
+            let rig = f.rig;
+            rig.samples.pair(s, t, &mut Sampler { rig, ws: f.ws });
+        });
     }
 
     /// Sample solves of the [sampled start](super::sampled_start) run so far (each target's
@@ -350,7 +363,15 @@ impl PhysicalBlend {
     /// format version, or were made for another rig (other shapes, triangles, options or
     /// energy terms); the blend is then unchanged.
     pub fn load_interactive(&mut self, bytes: &[u8]) -> Result<&InteractiveSpace, BlendError> {
-        let (space, fields) = decode(bytes, self.rig.cache_key(), self.cache_sizes())?;
+        let (space, fields, pairs) = decode(bytes, self.rig.cache_key(), self.cache_sizes())?;
+        let mut pairs = pairs.into_iter();
+        for t in 2..self.rig.shapes.len() {
+            for s in 1..t {
+                if let Some(Some(field)) = pairs.next() {
+                    self.rig.samples.restore_pair(s, t, field);
+                }
+            }
+        }
         for (s, three) in fields.into_iter().enumerate() {
             for (k, field) in three.into_iter().enumerate() {
                 if let Some(field) = field {

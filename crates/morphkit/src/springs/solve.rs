@@ -10,7 +10,7 @@ use super::options::{BlendResult, FrameStats, LinearSolver};
 use super::predictor;
 use super::reference::{Factor, Reference, References, GRID, PROBE};
 use super::rig::Rig;
-use super::sampled_start::{half_weight, shifted, SampleSolver, SAMPLES};
+use super::sampled_start::{half_weight, shifted, SampleSolver, PAIR, SAMPLES};
 use super::terms::PointTarget;
 use super::BlendError;
 use crate::mesh::Point;
@@ -22,6 +22,10 @@ use std::time::Instant;
 pub(super) enum Start<'a> {
     /// The canonical start: the predictor, with the sampled correction when asked for.
     Canonical,
+    /// The canonical start without the pairs' fields: the predictor with each target's own
+    /// sampled correction (the interactive mode's affine start, whose space holds the pairs'
+    /// equilibria as columns).
+    Singles,
     /// The predictor alone (the sampled start's own samples).
     Plain,
     /// Given world positions (`#V`).
@@ -91,9 +95,13 @@ impl Rig {
         let start_from = match from {
             Start::From(p) => Some(p),
             Start::Plain => None,
-            Start::Canonical if !self.options.sampled_start => None,
-            Start::Canonical => {
-                let correction = self.samples.correction(c, &mut Sampler { rig: self, ws });
+            Start::Canonical | Start::Singles if !self.options.sampled_start => None,
+            Start::Canonical | Start::Singles => {
+                let sampler = &mut Sampler { rig: self, ws };
+                let correction = match from {
+                    Start::Singles => self.samples.single_correction(c, sampler),
+                    _ => self.samples.correction(c, sampler),
+                };
                 corrected =
                     correction.map(|d| shifted(self.world_prediction(lin, rotated), &d, 1.0));
                 corrected.as_deref()
@@ -220,12 +228,32 @@ impl SampleSolver for Sampler<'_> {
             let _ = cell.set(reference.map(Arc::new));
         }
         let r = r.ok()?;
-        r.stats.converged.then(|| {
-            r.positions
-                .iter()
-                .zip(&p)
-                .map(|(x, p)| std::array::from_fn(|k| x[k] - p[k]))
-                .collect()
-        })
+        r.stats.converged.then(|| difference(&r.positions, &p))
     }
+
+    /// $r_{st} = x^*_0(c^{st}) - (P(c^{st}) + q_s(½) + q_t(½))$, solved from
+    /// $P + q_s(½) + q_t(½)$ (see [`sampled_start`](super::sampled_start)).
+    fn pair_field(&mut self, s: usize, t: usize, singles: Option<&[Point]>) -> Option<Vec<Point>> {
+        let mut c = vec![0.0; self.rig.shapes.len()];
+        c[s] = PAIR;
+        c[t] = PAIR;
+        let p = self.rig.predicted(&c);
+        let from = match singles {
+            Some(d) => shifted(p, d, 1.0),
+            None => p,
+        };
+        let r = self
+            .rig
+            .solve(self.ws, &c, &[], Start::From(&from), Factor::Fresh);
+        let r = r.ok()?;
+        r.stats.converged.then(|| difference(&r.positions, &from))
+    }
+}
+
+/// `x - p`, pointwise.
+fn difference(x: &[Point], p: &[Point]) -> Vec<Point> {
+    x.iter()
+        .zip(p)
+        .map(|(x, p)| std::array::from_fn(|k| x[k] - p[k]))
+        .collect()
 }

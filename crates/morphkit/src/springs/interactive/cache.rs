@@ -1,14 +1,15 @@
 //! A prepared [`InteractiveSpace`] as bytes, so that reopening a rig costs a file read instead
 //! of the preparation's solves (issue 38).
 //!
-//! Layout (little-endian): the magic `MKINTER2`; the rig's key (`u64`, [`Rig::cache_key`]);
+//! Layout (little-endian): the magic `MKINTER3`; the rig's key (`u64`, [`Rig::cache_key`]);
 //! the shape count $n$, free-coordinate count $n_f$ and vertex count $n_v$; the unconverged
 //! count; the diagonal; the preparation's seconds; the $n - 1$ checked errors; the snapshot
 //! count, then per snapshot its $n$ coefficients, its active targets (count, then indices),
 //! its left-out error and its $n_f$ correction values; then, per target and per sample
 //! ([`SAMPLES`](crate::springs::sampled_start::SAMPLES)), the sampled start's correction
 //! field: a tag (0 not computed, 1 did not converge, 2 stored) and, for 2, its $3 n_v$
-//! values. Every `f64` is stored by its bits, so a loaded space gives the same interactive
+//! values; then, the same way, every pair's field ($t = 2 … n-1$, then $s = 1 … t-1$; version 2
+//! had none, and its starts no pair correction, so its snapshots are refused). Every `f64` is stored by its bits, so a loaded space gives the same interactive
 //! shapes, bit for bit, as the one that was saved; and since the start's fields come with it,
 //! the first slider change after a reopening solves nothing either (version 1 left them out,
 //! so each target's first change ran its three sample solves: 1 s on the horse).
@@ -16,11 +17,11 @@
 use super::{InteractiveSpace, Snapshot};
 use crate::mesh::Point;
 use crate::springs::rig::Rig;
-use crate::springs::sampled_start::{Field, StartSamples, SAMPLES};
+use crate::springs::sampled_start::{pair_count, Field, StartSamples, SAMPLES};
 use crate::springs::terms::EnergyTerm;
 use crate::springs::BlendError;
 
-const MAGIC: &[u8; 8] = b"MKINTER2";
+const MAGIC: &[u8; 8] = b"MKINTER3";
 
 impl Rig {
     /// A fingerprint of everything an interactive space depends on: every shape's positions
@@ -92,7 +93,7 @@ pub(in crate::springs) fn encode(
     [n, nf, nv]: [usize; 3],
 ) -> Vec<u8> {
     let per = 8 * (2 * n + nf + 4);
-    let fields = 8 * (n - 1) * SAMPLES.len() * (1 + 3 * nv);
+    let fields = 8 * ((n - 1) * SAMPLES.len() + pair_count(n - 1)) * (1 + 3 * nv);
     let mut out = Vec::with_capacity(72 + 8 * n + per * space.snapshots.len() + fields);
     out.extend_from_slice(MAGIC);
     let word = |out: &mut Vec<u8>, w: u64| out.extend_from_slice(&w.to_le_bytes());
@@ -118,26 +119,36 @@ pub(in crate::springs) fn encode(
         word(&mut out, s.left_out.to_bits());
         s.d.iter().for_each(|x| word(&mut out, x.to_bits()));
     }
+    let put = |out: &mut Vec<u8>, cell: Option<&Field>| match cell {
+        None => word(out, 0),
+        Some(None) => word(out, 1),
+        Some(Some(field)) => {
+            word(out, 2);
+            for x in field.iter().flatten() {
+                word(out, x.to_bits());
+            }
+        }
+    };
     for s in 1..n {
         for k in 0..SAMPLES.len() {
-            match samples.computed(s, k) {
-                None => word(&mut out, 0),
-                Some(None) => word(&mut out, 1),
-                Some(Some(field)) => {
-                    word(&mut out, 2);
-                    for x in field.iter().flatten() {
-                        word(&mut out, x.to_bits());
-                    }
-                }
-            }
+            put(&mut out, samples.computed(s, k));
+        }
+    }
+    for t in 2..n {
+        for s in 1..t {
+            put(&mut out, samples.pair_computed(s, t));
         }
     }
     out
 }
 
-/// A decoded preparation: the space, and per target and sample the start's field where it
-/// was stored (`None`: not computed when saved).
-pub(in crate::springs) type Decoded = (InteractiveSpace, Vec<[Option<Field>; 3]>);
+/// A decoded preparation: the space, per target and sample the start's field where it was
+/// stored (`None`: not computed when saved), and per pair (in the file's order) the same.
+pub(in crate::springs) type Decoded = (
+    InteractiveSpace,
+    Vec<[Option<Field>; 3]>,
+    Vec<Option<Field>>,
+);
 
 /// Reads what [`encode`] wrote, for the rig with key `key`, `n` shapes, `nf` free
 /// coordinates and `nv` vertices; anything else is refused, saying why.
@@ -195,11 +206,9 @@ pub(in crate::springs) fn decode(
             left_out,
         });
     }
-    let mut fields = Vec::with_capacity(n - 1);
-    for s in 1..n {
-        let mut three: [Option<Field>; 3] = Default::default();
-        for (k, cell) in three.iter_mut().enumerate() {
-            *cell = match r.word()? {
+    let cell =
+        |r: &mut Reader<'_>, what: &dyn Fn() -> String| -> Result<Option<Field>, BlendError> {
+            Ok(match r.word()? {
                 0 => None,
                 1 => Some(None),
                 2 => {
@@ -209,14 +218,24 @@ pub(in crate::springs) fn decode(
                     }
                     Some(Some(std::sync::Arc::new(field)))
                 }
-                tag => {
-                    return Err(fail(format!(
-                        "target {s}, start sample {k}: unknown field tag {tag}"
-                    )))
-                }
-            };
+                tag => return Err(fail(format!("{}: unknown field tag {tag}", what()))),
+            })
+        };
+    let mut fields = Vec::with_capacity(n - 1);
+    for s in 1..n {
+        let mut three: [Option<Field>; 3] = Default::default();
+        for (k, c) in three.iter_mut().enumerate() {
+            *c = cell(&mut r, &|| format!("target {s}, start sample {k}"))?;
         }
         fields.push(three);
+    }
+    let mut pairs = Vec::with_capacity(pair_count(n - 1));
+    for t in 2..n {
+        for s in 1..t {
+            pairs.push(cell(&mut r, &|| {
+                format!("targets {s} and {t}, start pair")
+            })?);
+        }
     }
     if r.at != bytes.len() {
         return Err(fail(format!(
@@ -225,7 +244,7 @@ pub(in crate::springs) fn decode(
         )));
     }
     let space = InteractiveSpace::new(snapshots, checked, unconverged, diagonal, prepare_seconds);
-    Ok((space, fields))
+    Ok((space, fields, pairs))
 }
 
 struct Reader<'a> {

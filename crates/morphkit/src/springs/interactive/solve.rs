@@ -162,7 +162,9 @@ impl Rig {
     ) -> Result<(BlendResult, Vec<f64>), BlendError> {
         let started = Instant::now();
         let frame = self.frame_energy(c, &[], true, false);
-        let mut x = self.start_of(ws, c, Start::Canonical, &frame)?;
+        // The affine start without the pairs' fields: the space holds the pairs' equilibria
+        // as columns, and the left-out estimate must see them there.
+        let mut x = self.start_of(ws, c, Start::Singles, &frame)?;
         let cols = space.columns(c, exclude);
         let mut stats = FrameStats {
             gradient_tolerance: self.tolerance,
