@@ -10,7 +10,7 @@ use super::options::{BlendResult, FrameStats, LinearSolver};
 use super::predictor;
 use super::reference::{Factor, Reference, References, GRID, PROBE};
 use super::rig::Rig;
-use super::sampled_start::{half_weight, shifted, SampleSolver, PAIR, SAMPLES};
+use super::sampled_start::{half_weight, shifted, SampleSolver, StartSamples, PAIR, SAMPLES};
 use super::terms::PointTarget;
 use super::BlendError;
 use crate::mesh::Point;
@@ -71,6 +71,9 @@ impl Rig {
                     held: &frame.held,
                     options: &self.options,
                     tolerance: self.tolerance,
+                    projected_first: matches!(from, Start::Canonical)
+                        && self.options.sampled_start
+                        && !StartSamples::needed_pairs(c).is_empty(),
                 };
                 self.iterate(ws, &prob, c, factor, x, stats, &frame.lin)
             })
