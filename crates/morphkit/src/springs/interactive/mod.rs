@@ -8,8 +8,9 @@
 //! with the set of targets it involves.
 //!
 //! **A slider change** ([`Rig::solve_interactive`]). With the frame's energy $E$ exactly as in
-//! the full solve ([`super::frame`]) and its canonical start $x_0$ (the predictor plus the
-//! sampled correction), the shape is $x(y) = x_0 + D_A T y$: $D_A$ holds the corrections of
+//! the full solve ([`super::frame`]) and its affine start $x_0$ (the predictor plus each
+//! target's own sampled correction; the full solve's start also adds the pairs' fields,
+//! which the space holds as columns instead), the shape is $x(y) = x_0 + D_A T y$: $D_A$ holds the corrections of
 //! the snapshots whose targets are all active in this frame (a frame depends only on its
 //! nonzero weights, so the others do not belong), $T$ makes them orthonormal
 //! (eigenvectors of their Gram matrix, directions under $10^{-10}$ of the largest dropped).
