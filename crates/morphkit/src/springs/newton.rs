@@ -275,10 +275,6 @@ pub(crate) fn reference_at(
     }))
 }
 
-/// Trust-region Newton–CG from `x` (modified in place), its inner solves preconditioned by
-/// the turned `reference` (see [`reference`](super::reference)) until its first own
-/// factorization; with `only_reference`, the solve stops there instead (unconverged: a
-/// probe). Returns the final gradient.
 /// The projected phase of [`trust_region`]: while the largest gradient entry is above this
 /// fraction of the start's, each Newton step models the energy with the projected
 /// (positive semi-definite) Hessian at the iterate, factored afresh after every accepted step,
@@ -291,13 +287,18 @@ pub(crate) fn reference_at(
 /// whose targets' fields were solved apart and conflict where the targets meet. A single
 /// target's start interpolates its own equilibria, and there the exact model's quadratic
 /// convergence wins (starting projected cost ICT single expressions 3 → 5 iterations).
-/// Measured on the twelve ICT three-expression combinations of the scrub bench: Newton
-/// iterations 10 → 7 (median), rejected steps 69 → 40 in all, median time −31 %; with the
-/// pairs' fields in the start 8.5 → 7 and 63 → 33. The same equilibrium on 9 of 12, the other
-/// three 0.019–0.047 % of the diagonal away (another minimum of a nonconvex energy, which the
-/// canonical procedure names); docs/performance.md, "Morning of 6 December".
+/// Measured on the twelve ICT three-expression combinations of the scrub bench, with the
+/// pairs' fields in the start: Newton iterations 10 → 7 (median), rejected steps 69 → 36 in
+/// all, median time 0.58×. The same equilibrium on 9 of 12, the other three 0.019–0.069 % of
+/// the diagonal away (other minima of a nonconvex energy, which the canonical procedure
+/// names); docs/performance.md, "Morning of 6 December".
 const PROJECTED_PHASE: f64 = 1e-2;
 
+/// Trust-region Newton–CG from `x` (modified in place), its inner solves preconditioned by
+/// the turned `reference` (see [`reference`](super::reference)) until its first own
+/// factorization; with `only_reference`, the solve stops there instead (unconverged: a
+/// probe). Far from the equilibrium its model may be the projected Hessian
+/// ([`PROJECTED_PHASE`]). Returns the final gradient.
 pub(crate) fn trust_region(
     prob: &Problem<'_>,
     ws: &mut Workspace,
