@@ -95,6 +95,7 @@
 mod blender;
 mod constraints;
 pub mod continuity;
+mod direct;
 mod frame;
 mod frame_solver;
 mod gauge;

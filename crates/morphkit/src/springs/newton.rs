@@ -11,7 +11,7 @@
 //!   [`BlendOptions::keep_factor_cg`] iterations), and whenever the inner iteration runs out
 //!   of its budget without progress. Near the solution this is Newton's method with quadratic
 //!   convergence.
-//! - [`projected_newton`]: a fresh factorization of the projected Hessian every step and an
+//! - [`projected_newton`](super::direct::projected_newton): a fresh factorization of the projected Hessian every step and an
 //!   Armijo backtracking line search.
 //!
 //! A refreshed factor and the CG operator are assembled in one pass over the terms
@@ -107,14 +107,20 @@ pub(crate) struct Problem<'a> {
 }
 
 impl Problem<'_> {
-    fn gradient(&self, x: &[f64], g: &mut [f64]) -> f64 {
+    pub(super) fn gradient(&self, x: &[f64], g: &mut [f64]) -> f64 {
         let e = total_gradient(self.terms, self.params, x, g);
         self.held.mask_gradient(g);
         e
     }
 
     /// Assembles the Hessian of `kind` at `x` into `out` (scalar free-coordinate values).
-    fn hessian(&self, ws: &mut Workspace, x: &[f64], kind: HessianKind, exact_buf: bool) {
+    pub(super) fn hessian(
+        &self,
+        ws: &mut Workspace,
+        x: &[f64],
+        kind: HessianKind,
+        exact_buf: bool,
+    ) {
         ws.blocks.clear();
         for (t, p) in self.terms.iter().zip(self.params) {
             t.add_hessian(p, x, kind, &mut ws.blocks);
@@ -146,7 +152,11 @@ impl Problem<'_> {
     /// Factorizes `ws.projected`, adding the smallest multiple of the identity (from a fixed
     /// ladder) that makes it positive definite: flat regions have no stiffness normal to their
     /// plane at rest, and round-off can make such a pivot non-positive.
-    fn factorize(&self, ws: &mut Workspace, stats: &mut FrameStats) -> Result<(), BlendError> {
+    pub(super) fn factorize(
+        &self,
+        ws: &mut Workspace,
+        stats: &mut FrameStats,
+    ) -> Result<(), BlendError> {
         if ws.aggregation.is_some() {
             return self.factorize_with_ladder(ws, stats);
         }
@@ -225,7 +235,7 @@ impl Problem<'_> {
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
@@ -241,7 +251,7 @@ const REFERENCE_CG: usize = 12;
 const REFERENCE_ATOL: f64 = 0.5;
 
 /// Energy differences below this fraction of the energy are round-off.
-const ROUNDOFF: f64 = 1e-13;
+pub(super) const ROUNDOFF: f64 = 1e-13;
 
 /// The solve's last factor and its iterate, frozen as a [`Reference`], or else the factor
 /// of the projected Hessian at `x` (with the ladder's regularization); `None` with the
@@ -538,79 +548,6 @@ pub(crate) fn trust_region(
             }
         }
         stats.converged = gmax <= prob.tolerance;
-    }
-    if !e.is_finite() {
-        return Err(BlendError::Diverged {
-            iteration: stats.newton_iterations,
-        });
-    }
-    stats.gradient_norm = gmax;
-    stats.energy = e;
-    Ok(g)
-}
-
-/// Projected Newton with an Armijo line search from `x`. Returns the final gradient.
-pub(crate) fn projected_newton(
-    prob: &Problem<'_>,
-    ws: &mut Workspace,
-    x: &mut Vec<f64>,
-    stats: &mut FrameStats,
-) -> Result<Vec<f64>, BlendError> {
-    let sys = prob.system;
-    ws.use_double = false;
-    let n3 = x.len();
-    let mut g = vec![0.0; n3];
-    let mut e = prob.gradient(x, &mut g);
-    let mut gmax = sys.max_free(&g);
-    let mut x_trial = vec![0.0; n3];
-    let mut g_trial = vec![0.0; n3];
-    let mut step = vec![0.0; sys.num_free()];
-    stats.converged = gmax <= prob.tolerance;
-    while !stats.converged && stats.newton_iterations < prob.options.max_newton_iterations {
-        stats.newton_iterations += 1;
-        prob.hessian(ws, x, HessianKind::Projected, false);
-        prob.factorize(ws, stats)?;
-        sys.gather(&g, &mut step);
-        step.iter_mut().for_each(|v| *v = -*v);
-        ws.factor().solve_one(&mut step)?;
-        let mut slope = 0.0;
-        for (k, &i) in sys.dof_index.iter().enumerate() {
-            if i != u32::MAX {
-                slope += g[k] * step[i as usize];
-            }
-        }
-        if slope >= 0.0 {
-            // Not a descent direction (round-off at convergence): steepest descent.
-            sys.gather(&g, &mut step);
-            step.iter_mut().for_each(|v| *v = -*v);
-            slope = -dot(&step, &step);
-        }
-        let mut t = 1.0;
-        let mut accepted = false;
-        for _ in 0..60 {
-            x_trial.copy_from_slice(x);
-            sys.add_step(&mut x_trial, t, &step);
-            let e_trial = prob.gradient(&x_trial, &mut g_trial);
-            let g_trial_max = sys.max_free(&g_trial);
-            let roundoff = ROUNDOFF * e.abs().max(f64::MIN_POSITIVE);
-            if e_trial.is_finite()
-                && (e_trial <= e + prob.options.armijo * t * slope
-                    || (e_trial - e <= roundoff && g_trial_max < gmax))
-            {
-                accepted = true;
-                e = e_trial;
-                gmax = g_trial_max;
-                std::mem::swap(x, &mut x_trial);
-                std::mem::swap(&mut g, &mut g_trial);
-                break;
-            }
-            stats.rejected_steps += 1;
-            t *= 0.5;
-        }
-        stats.converged = gmax <= prob.tolerance;
-        if !accepted {
-            break;
-        }
     }
     if !e.is_finite() {
         return Err(BlendError::Diverged {

@@ -4,8 +4,9 @@
 //! fields and reference factors — are solves themselves, so they are filled from here
 //! ([`Sampler`], [`Rig::reference`]): the data lives below in the stack, the solving above it.
 
+use super::direct::projected_newton;
 use super::frame::FrameEnergy;
-use super::newton::{projected_newton, reference_at, trust_region, Problem, Workspace};
+use super::newton::{reference_at, trust_region, Problem, Workspace};
 use super::options::{BlendResult, FrameStats, LinearSolver};
 use super::predictor;
 use super::reference::{Factor, Reference, References, GRID, PROBE};
