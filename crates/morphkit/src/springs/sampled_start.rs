@@ -31,7 +31,7 @@
 //! corrections, solved once per pair on first need, from $P + q_s + q_t$. $\varphi$ is 1 at
 //! the sample and vanishes at 0 and 1, so a single target starts exactly as before, and the
 //! pair's own sample starts at its equilibrium. Measured on the scrub bench's twelve ICT
-//! combinations of three expressions (docs/performance.md, "Pairs in the start").
+//! combinations of three expressions (docs/performance.md, "Morning of 6 December").
 //!
 //! The samples are canonical solves themselves, so they, and every frame, depend on the
 //! weights and the rig alone, whichever frame, thread or order first asks for them. A sample
@@ -238,14 +238,10 @@ impl StartSamples {
     }
 }
 
-/// `out += w d`, starting from zeros.
+/// `out += w d` ([`shifted`]), starting from zeros.
 fn add(out: &mut Option<Vec<Point>>, w: f64, d: &[Point]) {
-    let acc = out.get_or_insert_with(|| vec![[0.0; 3]; d.len()]);
-    for (o, d) in acc.iter_mut().zip(d) {
-        for k in 0..3 {
-            o[k] += w * d[k];
-        }
-    }
+    let acc = out.take().unwrap_or_else(|| vec![[0.0; 3]; d.len()]);
+    *out = Some(shifted(acc, d, w));
 }
 
 /// The weight of a pair field in one target's coefficient $a$: $\varphi(a) = 4a(1-a)$ for
