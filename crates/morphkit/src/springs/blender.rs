@@ -13,7 +13,7 @@ use super::solve::Sampler;
 use super::terms::{EnergyTerm, PointTarget};
 use super::{BlendError, Constraints, Weights};
 use crate::mesh::ShapeSet;
-use crate::sparse::AggregationPreconditioner;
+use crate::sparse::{AggregationPreconditioner, Cholesky};
 use std::sync::Arc;
 
 /// Physical blendshape solver: build once, then [`solve`](Self::solve) for as many weight
@@ -169,10 +169,18 @@ impl PhysicalBlend {
                 },
                 None => None,
             };
-            match self.ws.chol.share_symbolic() {
+            match self
+                .ws
+                .chol
+                .as_ref()
+                .map(Cholesky::share_symbolic)
+                .transpose()
+            {
                 Ok(chol) => {
                     let mut ws = Workspace::new(chol, self.ws.blocks.clone(), self.ws.exact.len());
-                    ws.aggregation = aggregation;
+                    if let Some(agg) = aggregation {
+                        ws.set_aggregation(agg);
+                    }
                     workspaces.push(ws);
                 }
                 Err(_) => break,

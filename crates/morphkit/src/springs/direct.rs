@@ -31,7 +31,7 @@ pub(crate) fn projected_newton(
         prob.factorize(ws, stats)?;
         sys.gather(&g, &mut step);
         step.iter_mut().for_each(|v| *v = -*v);
-        ws.factor().solve_one(&mut step)?;
+        ws.factor()?.solve_one(&mut step)?;
         let mut slope = 0.0;
         for (k, &i) in sys.dof_index.iter().enumerate() {
             if i != u32::MAX {

@@ -30,8 +30,11 @@ use crate::sparse::{AggregationPreconditioner, Cholesky, Precision, SolveError};
 
 /// Per-thread buffers of a solve: numeric factor, block values, scalar values.
 pub(crate) struct Workspace {
-    /// The factor in the rig's [`Precision`](crate::sparse::Precision).
-    pub chol: Cholesky,
+    /// The factor in the rig's [`Precision`](crate::sparse::Precision); `None` when the
+    /// aggregation cycle preconditions ([`Self::aggregation`]): the fine symbolic analysis is
+    /// then dropped once the preconditioner is chosen (at a million vertices it is hundreds of
+    /// megabytes that no solve reads).
+    pub chol: Option<Cholesky>,
     /// A double-precision factor for the matrices whose single-precision factorization fails
     /// (allocated on first need; used until the end of that solve only, so that every solve
     /// starts alike).
@@ -40,7 +43,9 @@ pub(crate) struct Workspace {
     pub use_double: bool,
     pub blocks: BlockHessian,
     /// Exact-Hessian blocks when both Hessians are assembled in one pass
-    /// ([`EnergyTerm::add_hessians`]).
+    /// ([`EnergyTerm::add_hessians`]); unallocated with the aggregation cycle, whose solves
+    /// assemble the two Hessians in two passes over one block buffer (one copy of the
+    /// `72 · (#V + pairs)` bytes fewer, where memory is what limits the mesh size).
     pub blocks_exact: BlockHessian,
     /// Scalar values of the exact Hessian (the CG operator).
     pub exact: Vec<f64>,
@@ -59,13 +64,18 @@ pub(crate) struct Workspace {
 }
 
 impl Workspace {
-    /// New buffers around a factor.
-    pub fn new(chol: Cholesky, blocks: BlockHessian, nnz: usize) -> Self {
+    /// New buffers around a factor (`None`: the aggregation cycle preconditions, set
+    /// [`Self::aggregation`]).
+    pub fn new(chol: Option<Cholesky>, blocks: BlockHessian, nnz: usize) -> Self {
+        let blocks_exact = match chol {
+            Some(_) => blocks.clone(),
+            None => BlockHessian::unallocated(blocks.pattern_arc().clone()),
+        };
         Self {
             chol,
             double: None,
             use_double: false,
-            blocks_exact: blocks.clone(),
+            blocks_exact,
             blocks,
             exact: vec![0.0; nnz],
             projected: vec![0.0; nnz],
@@ -76,19 +86,48 @@ impl Workspace {
         }
     }
 
-    /// The factor the current solve uses.
-    pub fn factor(&mut self) -> &mut Cholesky {
-        self.parts().0
+    /// Preconditions with the aggregation cycle `agg`: the projected Hessian's values then
+    /// live in the cycle between refreshes ([`AggregationPreconditioner::take_values`]).
+    pub fn set_aggregation(&mut self, agg: AggregationPreconditioner) {
+        self.aggregation = Some(agg);
+        self.projected = Vec::new();
+    }
+
+    /// Allocates the buffer of the projected Hessian's values, or takes it back from the aggregation cycle
+    /// when it holds them (see [`Self::set_aggregation`]).
+    pub fn ensure_projected(&mut self) {
+        if self.projected.is_empty() {
+            self.projected = match self.aggregation.as_mut() {
+                Some(agg) => agg.take_values(),
+                None => vec![0.0; self.exact.len()],
+            };
+        }
+    }
+
+    /// The factor the current solve uses; an error when the aggregation cycle preconditions.
+    pub fn factor(&mut self) -> Result<&mut Cholesky, SolveError> {
+        Ok(self.parts()?.0)
     }
 
     /// The factor the current solve uses, beside the projected and exact Hessian values.
-    fn parts(&mut self) -> (&mut Cholesky, &mut Vec<f64>, &Vec<f64>) {
-        let chol = match (&mut self.double, self.use_double) {
-            (Some(d), true) => d,
-            _ => &mut self.chol,
+    fn parts(&mut self) -> Result<(&mut Cholesky, &mut Vec<f64>, &Vec<f64>), SolveError> {
+        let chol = match (&mut self.double, self.use_double, &mut self.chol) {
+            (Some(d), true, _) => d,
+            (_, _, Some(c)) => c,
+            (_, _, None) => return Err(no_factor()),
         };
-        (chol, &mut self.projected, &self.exact)
+        Ok((chol, &mut self.projected, &self.exact))
     }
+
+    /// The rig's factor (not the double-precision fallback).
+    fn rig_factor(&self) -> Result<&Cholesky, SolveError> {
+        self.chol.as_ref().ok_or_else(no_factor)
+    }
+}
+
+/// The error of a factor asked for where the aggregation cycle preconditions.
+fn no_factor() -> SolveError {
+    SolveError::Backend("internal: no fine factor where the aggregation cycle preconditions".into())
 }
 
 /// One equilibrium problem: terms with this frame's parameters.
@@ -129,6 +168,7 @@ impl Problem<'_> {
         let out = if exact_buf {
             &mut ws.exact
         } else {
+            ws.ensure_projected();
             &mut ws.projected
         };
         self.system.assemble(&ws.blocks, out);
@@ -138,6 +178,13 @@ impl Problem<'_> {
     /// both at `x`, in one pass over the terms (the same values as two [`Self::hessian`]
     /// calls).
     fn hessians(&self, ws: &mut Workspace, x: &[f64]) {
+        if ws.blocks_exact.diag.len() != ws.blocks.diag.len() {
+            // One block buffer (the aggregation cycle's workspaces): two passes.
+            self.hessian(ws, x, HessianKind::Projected, false);
+            self.hessian(ws, x, HessianKind::Exact, true);
+            return;
+        }
+        ws.ensure_projected();
         ws.blocks.clear();
         ws.blocks_exact.clear();
         for (t, p) in self.terms.iter().zip(self.params) {
@@ -162,11 +209,11 @@ impl Problem<'_> {
         }
         match self.factorize_with_ladder(ws, stats) {
             Err(BlendError::Solve(SolveError::NotPositiveDefinite { .. }))
-                if !ws.use_double && ws.chol.precision() == Precision::Single =>
+                if !ws.use_double && ws.rig_factor()?.precision() == Precision::Single =>
             {
                 // Beyond single precision: this solve continues with a double factor.
                 if ws.double.is_none() {
-                    ws.double = Some(ws.chol.share_symbolic_with(Precision::Double)?);
+                    ws.double = Some(ws.rig_factor()?.share_symbolic_with(Precision::Double)?);
                 }
                 ws.use_double = true;
                 self.factorize_with_ladder(ws, stats)
@@ -194,11 +241,10 @@ impl Problem<'_> {
             added = shift;
             stats.factorizations += 1;
             let attempt = match ws.aggregation.as_mut() {
-                Some(agg) => agg.refresh(&ws.projected, &ws.points),
-                None => {
-                    let (chol, values, _) = ws.parts();
-                    chol.factorize(values)
-                }
+                Some(agg) => agg.refresh_from(&mut ws.projected, &ws.points),
+                None => ws
+                    .parts()
+                    .and_then(|(chol, values, _)| chol.factorize(values)),
             };
             match attempt {
                 Ok(()) => break Ok(()),
@@ -267,7 +313,7 @@ pub(crate) fn reference_at(
     if let Some(at) = ws.factored_at.take() {
         if !ws.use_double {
             return Ok(Some(Reference {
-                factor: ws.chol.freeze()?,
+                factor: ws.rig_factor()?.freeze()?,
                 x: at,
             }));
         }
@@ -280,7 +326,7 @@ pub(crate) fn reference_at(
         return Ok(None);
     }
     Ok(Some(Reference {
-        factor: ws.chol.freeze()?,
+        factor: ws.rig_factor()?.freeze()?,
         x: x.to_vec(),
     }))
 }
@@ -425,7 +471,7 @@ pub(crate) fn trust_region(
                     )
                 }
                 None => {
-                    let (chol, projected, exact) = ws.parts();
+                    let (chol, projected, exact) = ws.parts()?;
                     // The model's matrix: the factored one itself in the projected phase.
                     let exact: &Vec<f64> = if early { &*projected } else { exact };
                     let pre: Pre<'_> = match (reference, warp.as_ref()) {

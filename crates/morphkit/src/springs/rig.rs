@@ -238,11 +238,11 @@ impl Rig {
             samples_bytes,
             &mut summary,
         )?;
-        if aggregation.is_none() && o.linear_solver == LinearSolver::TrustRegion {
+        if let (Some(chol), LinearSolver::TrustRegion) = (&chol, o.linear_solver) {
             // References get what the limit leaves, and are counted.
             let left = o.max_memory_bytes.saturating_sub(summary.predicted_bytes);
             let budget = o.reference_factor_bytes.min(left);
-            summary.reference_targets = References::targets(&chol, shapes.len() - 1, budget);
+            summary.reference_targets = References::targets(chol, shapes.len() - 1, budget);
             if summary.reference_targets > 0 {
                 summary.predicted_bytes +=
                     (4 * summary.reference_targets as u64 + 1) * chol.factor_bytes();
@@ -250,7 +250,7 @@ impl Rig {
         }
         let mut ws = Workspace::new(chol, BlockHessian::zeros(block_pattern), nnz);
         if let Some(levels) = &aggregation {
-            ws.aggregation = Some(AggregationPreconditioner::new(levels.clone())?);
+            ws.set_aggregation(AggregationPreconditioner::new(levels.clone())?);
         }
         Ok(Built::Rig(Box::new((
             Rig {
@@ -331,8 +331,9 @@ impl Rig {
 }
 
 /// The preconditioner of a blend (see [`super::Preconditioner`]) and its memory: the
-/// aggregation levels when the cycle preconditions (the fine factor then never gets numeric
-/// buffers), or the factor with its buffers. Sets `summary`'s predicted bytes for the path
+/// aggregation levels when the cycle preconditions (the fine factor's symbolic analysis, which
+/// only decided the choice, is then dropped and never gets numeric buffers), or the factor
+/// with its buffers. Sets `summary`'s predicted bytes for the path
 /// chosen (with one workspace, and per further workspace) and its aggregation counts; fails
 /// with [`BlendError::TooLarge`] when that path is over the limit.
 fn choose_preconditioner(
@@ -342,7 +343,7 @@ fn choose_preconditioner(
     sys: SystemBytes,
     samples_bytes: u64,
     summary: &mut RigSummary,
-) -> Result<(Option<Arc<AggregationLevels>>, Cholesky), BlendError> {
+) -> Result<(Option<Arc<AggregationLevels>>, Option<Cholesky>), BlendError> {
     let nnz = system.pattern.nnz();
     let base = sys.shared + samples_bytes;
     let factor_ws = sys.workspace + chol.numeric_bytes();
@@ -357,11 +358,8 @@ fn choose_preconditioner(
         let (shared, cycle) = levels.bytes();
         summary.aggregates = levels.num_aggregates();
         summary.coarse_flops = levels.coarse_flops();
-        chosen = (
-            Some(levels),
-            base + shared + sys.workspace + cycle,
-            sys.workspace + cycle,
-        );
+        let workspace = sys.workspace - sys.factor_only + cycle;
+        chosen = (Some(levels), base + shared + workspace, workspace);
     }
     let (aggregation, predicted, workspace) = chosen;
     summary.predicted_bytes = predicted;
@@ -374,10 +372,9 @@ fn choose_preconditioner(
             basis: MemoryEstimate::Symbolic,
         });
     }
-    let chol = if aggregation.is_none() {
-        chol.with_numeric()?
-    } else {
-        chol
+    let chol = match aggregation {
+        None => Some(chol.with_numeric()?),
+        Some(_) => None,
     };
     Ok((aggregation, chol))
 }

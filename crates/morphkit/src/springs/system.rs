@@ -210,6 +210,10 @@ pub(crate) const RIG_BYTES_PER_VERTEX: u64 = 4096;
 pub(crate) struct SystemBytes {
     pub shared: u64,
     pub workspace: u64,
+    /// The part of `workspace` that the aggregation cycle's workspaces do without: the exact
+    /// Hessian's 3×3 blocks (both Hessians are assembled through one block buffer) and the
+    /// projected Hessian's values (held by the cycle itself between refreshes).
+    pub factor_only: u64,
 }
 
 impl SystemBytes {
@@ -221,6 +225,7 @@ impl SystemBytes {
             shared: 8 * scalar_nnz + 8 * 3 * nv + 36 * blocks + 12 * nv + RIG_BYTES_PER_VERTEX * nv,
             // Two value arrays (exact and projected), two sets of 3×3 blocks.
             workspace: 16 * scalar_nnz + 2 * 72 * blocks,
+            factor_only: 72 * blocks + 8 * scalar_nnz,
         }
     }
 }
@@ -253,7 +258,7 @@ pub(crate) fn predicted_bytes(
     let (nv, pairs) = (n as u64, block_pattern.num_pairs() as u64);
     let s = SystemBytes::new(nv, pairs);
     if without_factor {
-        return Ok(s.shared + s.workspace);
+        return Ok(s.shared + s.workspace - s.factor_only);
     }
     let mut entries = Vec::with_capacity(block_pattern.num_pairs());
     for i in 0..n {

@@ -265,8 +265,8 @@ impl Rig {
                 let values = ws.projected.clone();
                 stats.factorizations += 1;
                 let mut z = gf.clone();
-                if ws.factor().factorize(&values).is_err() || ws.factor().solve_one(&mut z).is_err()
-                {
+                let Ok(factor) = ws.factor() else { break };
+                if factor.factorize(&values).is_err() || factor.solve_one(&mut z).is_err() {
                     break;
                 }
                 z.iter_mut().for_each(|v| *v = -*v);
@@ -324,12 +324,14 @@ impl Rig {
         }
         held.mask_hessian(&mut ws.blocks);
         let system = &self.system;
-        system.assemble(&ws.blocks, &mut ws.projected);
+        ws.ensure_projected();
+        let values = &mut ws.projected;
+        system.assemble(&ws.blocks, values);
         let slots = &system.diag_slots;
-        let mean = slots.iter().map(|&d| ws.projected[d as usize]).sum::<f64>()
-            / slots.len().max(1) as f64;
+        let mean =
+            slots.iter().map(|&d| values[d as usize]).sum::<f64>() / slots.len().max(1) as f64;
         for &d in slots {
-            ws.projected[d as usize] += 1e-8 * mean;
+            values[d as usize] += 1e-8 * mean;
         }
     }
 }

@@ -218,6 +218,15 @@ impl BlockHessian {
             pattern,
         }
     }
+    /// No values (empty `diag` and `off`) for `pattern`: a placeholder that is never
+    /// assembled into.
+    pub fn unallocated(pattern: std::sync::Arc<BlockPattern>) -> Self {
+        Self {
+            diag: Vec::new(),
+            off: Vec::new(),
+            pattern,
+        }
+    }
     /// The pattern.
     pub fn pattern(&self) -> &BlockPattern {
         &self.pattern
