@@ -225,3 +225,39 @@ fn bad_input_is_refused_with_its_reason() {
         Err(SolveError::Dimension { .. })
     ));
 }
+
+#[test]
+fn refresh_from_takes_the_buffer_and_gives_the_same_bits_as_refresh() {
+    let (p, a, na, pos) = lattice(4, 4, 6);
+    let levels = Arc::new(AggregationLevels::new(p.clone(), &na).unwrap());
+    let mut copied = AggregationPreconditioner::new(levels.clone()).unwrap();
+    copied.refresh(&a, &pos).unwrap();
+    let mut owned = AggregationPreconditioner::new(levels).unwrap();
+    // The cycle's own buffer, filled by the caller and handed back.
+    let mut values = owned.take_values();
+    assert_eq!(values.len(), a.len());
+    let mut r = rhs(p.n(), 3);
+    assert!(
+        owned.apply(&mut r).is_err(),
+        "applied while its values are out"
+    );
+    // A refused refresh leaves the caller's values where they were.
+    values.copy_from_slice(&a);
+    values[p.diag_slot(2)] = -1.0;
+    assert!(matches!(
+        owned.refresh_from(&mut values, &pos),
+        Err(SolveError::NotPositiveDefinite { column: 2, .. })
+    ));
+    assert_eq!(values.len(), a.len());
+    values[p.diag_slot(2)] = a[p.diag_slot(2)];
+    owned.refresh_from(&mut values, &pos).unwrap();
+    assert!(values.is_empty(), "the cycle holds the only copy");
+    let b = rhs(p.n(), 7);
+    let (mut x, mut y) = (b.clone(), b.clone());
+    copied.apply(&mut x).unwrap();
+    owned.apply(&mut y).unwrap();
+    assert_eq!(x, y);
+    // Taken again, the buffer has the pattern's length (its old values are the caller's to
+    // overwrite).
+    assert_eq!(owned.take_values().len(), a.len());
+}

@@ -4,13 +4,13 @@
 
 use super::frame_solver::{report_lost, FrameSolver};
 use super::interactive::{decode, encode, snapshot_coefficients, InteractiveSpace, CHECKS};
-use super::newton::Workspace;
 use super::options::{BlendOptions, BlendResult, RigSummary};
 use super::predictor::BlendPredictor;
 use super::rig::{Built, Rig};
 use super::sampled_start::StartSamples;
 use super::solve::Sampler;
 use super::terms::{EnergyTerm, PointTarget};
+use super::workspace::Workspace;
 use super::{BlendError, Constraints, Weights};
 use crate::mesh::ShapeSet;
 use crate::sparse::{AggregationPreconditioner, Cholesky};

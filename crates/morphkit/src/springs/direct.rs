@@ -3,9 +3,10 @@
 //! search, over the same [`Problem`] and [`Workspace`] as the default
 //! [`trust_region`](super::newton::trust_region).
 
-use super::newton::{dot, Problem, Workspace, ROUNDOFF};
+use super::newton::{dot, Problem, ROUNDOFF};
 use super::options::FrameStats;
 use super::terms::HessianKind;
+use super::workspace::Workspace;
 use super::BlendError;
 
 /// Projected Newton with an Armijo line search from `x`. Returns the final gradient.

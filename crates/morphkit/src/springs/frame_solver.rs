@@ -1,11 +1,11 @@
 //! One thread's view of a [`PhysicalBlend`](super::PhysicalBlend) ([`FrameSolver`]), and the
 //! results of parallel frames with lost items reported.
 
-use super::newton::Workspace;
 use super::reference::Factor;
 use super::rig::Rig;
 use super::solve::Start;
 use super::terms::PointTarget;
+use super::workspace::Workspace;
 use super::{BlendError, BlendResult, Weights};
 
 /// The results of [`PhysicalBlend::map_frames`] with every lost item (`None`, a thread that

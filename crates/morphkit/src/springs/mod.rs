@@ -118,6 +118,7 @@ mod system;
 pub mod terms;
 pub mod tether;
 pub mod weights;
+mod workspace;
 
 pub use blender::{blend, InteractiveCacheUse, PhysicalBlend};
 pub use constraints::{

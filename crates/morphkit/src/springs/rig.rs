@@ -11,7 +11,6 @@
 
 use super::constraints::{stretched_by_target, thin_bands, Components, Constraints};
 use super::holds::FrameHolds;
-use super::newton::Workspace;
 use super::options::{check_options, BlendOptions, LinearSolver, RigSummary};
 use super::reference::References;
 use super::rotation_predictor::RotationPredictor;
@@ -20,6 +19,7 @@ use super::system::{
     expand_vertex_order, predicted_bytes, vertex_nested_dissection, FreeSystem, SystemBytes,
 };
 use super::terms::{BlockHessian, BlockPattern, EnergyTerm, HingeTerm, PointTarget, SpringTerm};
+use super::workspace::Workspace;
 use super::{BlendError, FillOrdering, MemoryEstimate, Predictor, SpringSet, StiffnessRule};
 use crate::mesh::{validate, ShapeSet, Topology};
 use crate::sparse::{AggregationLevels, AggregationPreconditioner, Cholesky, Ordering};

@@ -6,13 +6,14 @@
 
 use super::direct::projected_newton;
 use super::frame::FrameEnergy;
-use super::newton::{reference_at, trust_region, Problem, Workspace};
+use super::newton::{reference_at, trust_region, Problem};
 use super::options::{BlendResult, FrameStats, LinearSolver};
 use super::predictor;
 use super::reference::{Factor, Reference, References, GRID, PROBE};
 use super::rig::Rig;
 use super::sampled_start::{half_weight, shifted, SampleSolver, StartSamples, PAIR, SAMPLES};
 use super::terms::PointTarget;
+use super::workspace::Workspace;
 use super::BlendError;
 use crate::mesh::Point;
 use std::sync::Arc;

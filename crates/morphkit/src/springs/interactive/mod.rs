@@ -24,10 +24,10 @@ mod solve;
 
 pub(super) use cache::{decode, encode};
 
-use super::newton::Workspace;
 use super::reference::Factor;
 use super::rig::Rig;
 use super::solve::Start;
+use super::workspace::Workspace;
 use nalgebra::DMatrix;
 
 /// One snapshot: a canonical equilibrium's correction to the predictor.

@@ -3,7 +3,6 @@
 //! [module docs](super)).
 
 use super::InteractiveSpace;
-use crate::springs::newton::Workspace;
 use crate::springs::options::{BlendResult, FrameStats};
 use crate::springs::predictor;
 use crate::springs::rig::Rig;
@@ -12,6 +11,7 @@ use crate::springs::system::FreeSystem;
 use crate::springs::terms::{
     total_energy, total_gradient, EnergyTerm, Held, HessianKind, TermParameters,
 };
+use crate::springs::workspace::Workspace;
 use crate::springs::BlendError;
 use nalgebra::{DMatrix, DMatrixView, DVector, DVectorView, DVectorViewMut, Dyn};
 use std::time::Instant;
