@@ -297,10 +297,9 @@ pub(crate) fn predicted_bytes_lower_bound(
     let n = vertices as u64;
     let pairs = edges.len() as u64;
     let s = SystemBytes::new(n, pairs);
-    let factor = if without_factor {
-        0
-    } else {
-        factor_bytes(n, pairs, n + pairs, precision)
-    };
-    s.shared + s.workspace + factor
+    if without_factor {
+        // The aggregation cycle's workspaces (see SystemBytes::factor_only).
+        return s.shared + s.workspace - s.factor_only;
+    }
+    s.shared + s.workspace + factor_bytes(n, pairs, n + pairs, precision)
 }
