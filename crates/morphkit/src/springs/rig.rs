@@ -186,10 +186,7 @@ impl Rig {
             o.factor_precision,
             o.may_aggregate(),
         )? + samples_bytes;
-        if estimate_only {
-            return Ok(Built::Estimate(summary.predicted_bytes));
-        }
-        if summary.predicted_bytes > o.max_memory_bytes {
+        if summary.predicted_bytes > o.max_memory_bytes && !estimate_only {
             return Err(BlendError::TooLarge {
                 vertices: n,
                 predicted_bytes: summary.predicted_bytes,
@@ -248,6 +245,11 @@ impl Rig {
                     (4 * summary.reference_targets as u64 + 1) * chol.factor_bytes();
             }
         }
+        if estimate_only {
+            // The path the blend would take, with its preconditioner's own memory (the
+            // aggregation levels and the coarse factor are a seventh of a sheet's total).
+            return Ok(Built::Estimate(summary.predicted_bytes));
+        }
         let mut ws = Workspace::new(chol, BlockHessian::zeros(block_pattern), nnz);
         if let Some(levels) = &aggregation {
             ws.set_aggregation(AggregationPreconditioner::new(levels.clone())?);
@@ -278,13 +280,19 @@ impl Rig {
         ))))
     }
 
-    /// The symbolic analysis's memory estimate of a blend of `shapes` (bytes), without the
-    /// early checks and without building the solver.
+    /// The memory estimate of a blend of `shapes` (bytes) on the path it would take (the
+    /// factor or the aggregation cycle, with its levels), whatever the limit: the symbolic
+    /// analysis and the aggregation levels are built, the solver's buffers are not, and the
+    /// early checks are skipped.
     pub(super) fn estimate_bytes(
         shapes: &ShapeSet,
         options: &BlendOptions,
     ) -> Result<u64, BlendError> {
-        match Self::build(shapes, options, Vec::new(), true)? {
+        let unlimited = BlendOptions {
+            max_memory_bytes: u64::MAX,
+            ..options.clone()
+        };
+        match Self::build(shapes, &unlimited, Vec::new(), true)? {
             Built::Estimate(b) => Ok(b),
             Built::Rig(_) => Err(BlendError::InvalidOption(
                 "internal: a blend where an estimate was asked for".into(),
