@@ -8,9 +8,9 @@
 //!    part of [`SAMPLE_VERTICES`] vertices (a breadth-first ball from the first triangle),
 //!    scaled to the whole mesh. The part's estimate is that of the path its blend takes,
 //!    with the aggregation cycle's levels and coarse factor where the cycle preconditions
-//!    (before 6 December it left them out, and a 1.21M-vertex sheet passed this check at
-//!    7.2 GiB, then took 39 s and 8.0 GB of set-up to be refused at 8.92 GiB; now it is
-//!    refused here in 6.8 s at 1.2 GB, with 8.65 GiB). Scaled linearly it under-estimates every surface whose
+//!    (before 6 December it left them out, and a 1.21M-vertex sheet passed this check, then
+//!    took 39 s and 8.0 GB of set-up to be refused at 8.92 GiB; now it is refused here in
+//!    6.8 s at 1.2 GB, with 8.65 GiB). Scaled linearly it under-estimates every surface whose
 //!    factor fill per vertex grows with size (nested dissection of a sheet: `n log n`), and
 //!    a ball's rim fills less than the interior, so the mesh is refused only when the linear
 //!    scaling is over the limit; the message gives the likelier size: the `n log n` scaling
