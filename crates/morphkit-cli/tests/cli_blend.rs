@@ -81,6 +81,9 @@ fn blend_writes_frames_reports_and_refuses_bad_input() {
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     let frames = r["frames"].as_array().unwrap();
     assert_eq!(frames.len(), 5);
+    // The sampled start's solves (each target's equilibria at ¼, ½, ¾) are reported.
+    let samples = r["start_sample_solves"].as_u64().unwrap();
+    assert!((1..=3).contains(&samples), "{samples} sample solves");
     for f in frames {
         assert_eq!(f["solver"]["converged"], true);
         let (p, l) = (

@@ -565,6 +565,9 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
             "rig": solver.as_ref().map(|s| s.summary().clone()),
             "free_dofs": solver.as_ref().map(|s| s.num_free_dofs()),
             "fixed_vertices": solver.as_ref().map(|s| s.constraints().fixed.len()),
+            // Canonical solves the sampled start ran besides the frames (a one-frame blend
+            // at ½ is such a sample, and its frame then takes no Newton iteration).
+            "start_sample_solves": solver.as_ref().map(|s| s.start_samples_solved()),
             "threads": threads,
             "unconverged_frames": unconverged,
             "interactive_uncertain_frames": uncertain.iter().map(|u| u.0).collect::<Vec<_>>(),
