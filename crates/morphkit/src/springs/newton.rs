@@ -129,6 +129,15 @@ impl Problem<'_> {
         stats: &mut FrameStats,
     ) -> Result<(), BlendError> {
         let diag = &self.system.diag_slots;
+        if ws.projected.len() != ws.exact.len() {
+            // Never the case after `hessian` (Workspace::ensure_projected): an error, not a panic.
+            return Err(SolveError::Dimension {
+                what: "projected Hessian values",
+                expected: ws.exact.len(),
+                found: ws.projected.len(),
+            }
+            .into());
+        }
         let mean =
             diag.iter().map(|&d| ws.projected[d as usize]).sum::<f64>() / diag.len().max(1) as f64;
         let mut shift = 1e-10 * mean;
