@@ -186,3 +186,37 @@ fn a_saved_preparation_gives_the_same_bits_and_is_refused_for_another_rig() {
     let mut other_target = PhysicalBlend::new(&moved, &BlendOptions::default()).unwrap();
     assert!(other_target.load_interactive(&bytes).is_err());
 }
+
+#[test]
+fn with_the_aggregation_cycle_interactive_frames_leave_full_solves_unchanged() {
+    // The cycle's workspace lends the projected Hessian's values to the interactive mode and
+    // has no factor for its refinement: neither may change a later full solve's bits.
+    let options = BlendOptions {
+        preconditioner: morphkit::springs::Preconditioner::Aggregation,
+        ..Default::default()
+    };
+    let weights = Weights::Delta(vec![0.4, 0.3]);
+    let mut fresh = PhysicalBlend::new(&rig(), &options).unwrap();
+    assert!(fresh.summary().aggregates > 0);
+    let full = fresh.solve(&weights).unwrap();
+    assert!(full.stats.converged, "{:?}", full.stats);
+    let mut used = PhysicalBlend::new(&rig(), &options).unwrap();
+    let space = used.prepare_interactive(1);
+    assert_eq!(space.unconverged, 0);
+    for refine in [0, 1] {
+        let fast = used.solve_interactive(&weights, refine).unwrap();
+        let diag = bbox_diagonal(used.shapes().positions(0));
+        let d = max_dist(&fast.positions, &full.positions) / diag;
+        let estimate = fast.stats.error_estimate.unwrap();
+        assert!(
+            d.is_finite() && d <= estimate.max(1e-3),
+            "refine {refine}: {d} vs {estimate}"
+        );
+    }
+    let again = used.solve(&weights).unwrap();
+    assert_same_frame(
+        &again.positions,
+        &full.positions,
+        "after interactive frames",
+    );
+}
