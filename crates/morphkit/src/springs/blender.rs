@@ -176,13 +176,12 @@ impl PhysicalBlend {
                 .map(Cholesky::share_symbolic)
                 .transpose()
             {
-                Ok(chol) => {
-                    let mut ws = Workspace::new(chol, self.ws.blocks.clone(), self.ws.exact.len());
-                    if let Some(agg) = aggregation {
-                        ws.set_aggregation(agg);
-                    }
-                    workspaces.push(ws);
-                }
+                Ok(chol) => workspaces.push(Workspace::new(
+                    chol,
+                    aggregation,
+                    self.ws.blocks.clone(),
+                    self.ws.exact.len(),
+                )),
                 Err(_) => break,
             }
         }

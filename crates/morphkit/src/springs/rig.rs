@@ -250,10 +250,14 @@ impl Rig {
             // aggregation levels and the coarse factor are a seventh of a sheet's total).
             return Ok(Built::Estimate(summary.predicted_bytes));
         }
-        let mut ws = Workspace::new(chol, BlockHessian::zeros(block_pattern), nnz);
-        if let Some(levels) = &aggregation {
-            ws.set_aggregation(AggregationPreconditioner::new(levels.clone())?);
-        }
+        // Numeric buffers only now, past the estimate (the early check estimates a part of
+        // the mesh through this function and must not allocate its factor).
+        let chol = chol.map(Cholesky::with_numeric).transpose()?;
+        let cycle = match &aggregation {
+            Some(levels) => Some(AggregationPreconditioner::new(levels.clone())?),
+            None => None,
+        };
+        let ws = Workspace::new(chol, cycle, BlockHessian::zeros(block_pattern), nnz);
         Ok(Built::Rig(Box::new((
             Rig {
                 shapes: shapes.clone(),
@@ -340,8 +344,8 @@ impl Rig {
 
 /// The preconditioner of a blend (see [`super::Preconditioner`]) and its memory: the
 /// aggregation levels when the cycle preconditions (the fine factor's symbolic analysis, which
-/// only decided the choice, is then dropped and never gets numeric buffers), or the factor
-/// with its buffers. Sets `summary`'s predicted bytes for the path
+/// only decided the choice, is then dropped), or the factor's symbolic analysis (its numeric
+/// buffers come after the estimate). Sets `summary`'s predicted bytes for the path
 /// chosen (with one workspace, and per further workspace) and its aggregation counts; fails
 /// with [`BlendError::TooLarge`] when that path is over the limit.
 fn choose_preconditioner(
@@ -380,9 +384,7 @@ fn choose_preconditioner(
             basis: MemoryEstimate::Symbolic,
         });
     }
-    let chol = match aggregation {
-        None => Some(chol.with_numeric()?),
-        Some(_) => None,
-    };
+    // The factor without numeric buffers yet (see `Rig::build`).
+    let chol = aggregation.is_none().then_some(chol);
     Ok((aggregation, chol))
 }

@@ -2,8 +2,8 @@
 //! aggregation cycle that holds the projected Hessian's values between its refreshes), the
 //! Hessians as 3×3 blocks and as scalar values. On the cycle's path a workspace holds no fine
 //! symbolic analysis, one block buffer, and one array of values besides the cycle's: on a
-//! million-vertex sheet that cut the blend's peak resident from 9.05 to 7.70 GB
-//! (docs/performance.md, "Film scale").
+//! million-vertex sheet that cut the blend's peak resident from 9.05 to 7.70 GB on one thread
+//! (docs/performance.md, "Evening of 6 December").
 
 use super::terms::BlockHessian;
 use crate::sparse::{AggregationPreconditioner, Cholesky, SolveError};
@@ -12,8 +12,7 @@ use crate::sparse::{AggregationPreconditioner, Cholesky, SolveError};
 pub(crate) struct Workspace {
     /// The factor in the rig's [`Precision`](crate::sparse::Precision); `None` when the
     /// aggregation cycle preconditions ([`Self::aggregation`]): the fine symbolic analysis is
-    /// then dropped once the preconditioner is chosen (at a million vertices it is hundreds of
-    /// megabytes that no solve reads).
+    /// then dropped once the preconditioner is chosen (no solve reads it).
     pub chol: Option<Cholesky>,
     /// A double-precision factor for the matrices whose single-precision factorization fails
     /// (allocated on first need; used until the end of that solve only, so that every solve
@@ -44,12 +43,21 @@ pub(crate) struct Workspace {
 }
 
 impl Workspace {
-    /// New buffers around a factor (`None`: the aggregation cycle preconditions, set
-    /// [`Self::aggregation`]).
-    pub fn new(chol: Option<Cholesky>, blocks: BlockHessian, nnz: usize) -> Self {
-        let blocks_exact = match chol {
-            Some(_) => blocks.clone(),
-            None => BlockHessian::unallocated(blocks.pattern_arc().clone()),
+    /// New buffers around the preconditioner: the factor `chol`, or the aggregation cycle
+    /// `aggregation` (then `chol` is `None`, and the projected Hessian's values live in the
+    /// cycle between refreshes, [`AggregationPreconditioner::take_values`]).
+    pub fn new(
+        chol: Option<Cholesky>,
+        aggregation: Option<AggregationPreconditioner>,
+        blocks: BlockHessian,
+        nnz: usize,
+    ) -> Self {
+        let (blocks_exact, projected) = match chol {
+            Some(_) => (blocks.clone(), vec![0.0; nnz]),
+            None => (
+                BlockHessian::unallocated(blocks.pattern_arc().clone()),
+                Vec::new(),
+            ),
         };
         Self {
             chol,
@@ -58,23 +66,16 @@ impl Workspace {
             blocks_exact,
             blocks,
             exact: vec![0.0; nnz],
-            projected: vec![0.0; nnz],
-            aggregation: None,
+            projected,
+            aggregation,
             points: Vec::new(),
             factored_at: None,
             reduced: Default::default(),
         }
     }
 
-    /// Preconditions with the aggregation cycle `agg`: the projected Hessian's values then
-    /// live in the cycle between refreshes ([`AggregationPreconditioner::take_values`]).
-    pub fn set_aggregation(&mut self, agg: AggregationPreconditioner) {
-        self.aggregation = Some(agg);
-        self.projected = Vec::new();
-    }
-
-    /// Allocates the buffer of the projected Hessian's values, or takes it back from the aggregation cycle
-    /// when it holds them (see [`Self::set_aggregation`]).
+    /// Allocates the buffer of the projected Hessian's values, or takes it back from the
+    /// aggregation cycle when it holds them (see [`Self::new`]).
     pub fn ensure_projected(&mut self) {
         if self.projected.is_empty() {
             self.projected = match self.aggregation.as_mut() {
