@@ -220,3 +220,57 @@ fn with_the_aggregation_cycle_interactive_frames_leave_full_solves_unchanged() {
         "after interactive frames",
     );
 }
+
+/// The tube of [`rig`] with a third target: the tube's far half twisted 60° about its axis.
+fn rig3() -> ShapeSet {
+    let two = rig();
+    let twisted = two
+        .positions(0)
+        .iter()
+        .map(|&[x, y, z]| {
+            let a = 60f64.to_radians() * ((x - 2.0) / 2.0).clamp(0.0, 1.0);
+            [x, a.cos() * y - a.sin() * z, a.sin() * y + a.cos() * z]
+        })
+        .collect();
+    let mut shapes: Vec<(String, Vec<_>)> = (0..two.len())
+        .map(|s| (format!("s{s}"), two.positions(s).to_vec()))
+        .collect();
+    shapes.push(("C".to_string(), twisted));
+    ShapeSet::new(two.base().clone(), shapes).unwrap()
+}
+
+#[test]
+fn with_three_targets_the_estimate_counts_the_pairs_held_apart_and_bounds_the_error() {
+    let mut blend = PhysicalBlend::new(&rig3(), &BlendOptions::default()).unwrap();
+    let space = blend.prepare_interactive(2);
+    // 3 targets: 3 samples each, 2 per pair.
+    assert_eq!(space.len(), 15);
+    let diag = bbox_diagonal(blend.shapes().positions(0));
+    let bytes = blend.interactive_bytes().unwrap();
+    let mut reopened = PhysicalBlend::new(&rig3(), &BlendOptions::default()).unwrap();
+    reopened.load_interactive(&bytes).unwrap();
+    for w in [
+        [0.4, 0.3, 0.3],
+        [0.6, 0.5, 0.4],
+        [0.2, 0.7, 0.5],
+        [0.8, 0.8, 0.8],
+    ] {
+        let weights = Weights::Delta(w.to_vec());
+        let full = blend.solve(&weights).unwrap();
+        assert!(full.stats.converged, "{w:?}");
+        let fast = blend.solve_interactive(&weights, 0).unwrap();
+        let error = max_dist(&fast.positions, &full.positions) / diag;
+        let estimate = fast.stats.error_estimate.expect("an estimate");
+        assert!(
+            error <= estimate,
+            "{w:?}: error {error:.2e} over its estimate {estimate:.2e}"
+        );
+        // The estimate's data came with the saved preparation.
+        let again = reopened.solve_interactive(&weights, 0).unwrap();
+        assert_eq!(
+            again.stats.error_estimate, fast.stats.error_estimate,
+            "{w:?}"
+        );
+        assert_same_frame(&again.positions, &fast.positions, &format!("{w:?} loaded"));
+    }
+}

@@ -16,7 +16,7 @@
 //! vertex distance over the bounding-box diagonal), and the same for the interactive mode
 //! ([`PhysicalBlend::solve_interactive`], prepared once, timed as `prepare_interactive_s`)
 //! without and with one refinement step, with how many states stayed within 1e-3 of the
-//! diagonal and how many exceeded their own error estimate. One thread, so the numbers are those of an
+//! diagonal, how many exceeded their own error estimate and by what largest ratio. One thread, so the numbers are those of an
 //! interactive session on one core.
 
 use morphkit::io::read_mesh;
@@ -131,6 +131,8 @@ fn rig_row(name: &str, shapes: &ShapeSet, face: bool, changes: usize) -> anyhow:
         let (mut fast, mut fast_error, mut refined, mut refined_error) =
             (vec![], vec![], vec![], vec![]);
         let (mut over_estimate, mut within) = (0, 0);
+        // The largest error / estimate (0 where every estimate is 0 and met exactly).
+        let mut estimate_ratio = 0.0f64;
         let mut unconverged = 0;
         for (w, _) in all.iter().zip(&states).filter(|(_, s)| s.0 == kind) {
             let t = Instant::now();
@@ -148,6 +150,11 @@ fn rig_row(name: &str, shapes: &ShapeSet, face: bool, changes: usize) -> anyhow:
             let e = max_distance(&f.positions, &r.positions) / diag;
             fast_error.push(e);
             over_estimate += usize::from(f.stats.error_estimate.is_none_or(|b| e > b));
+            estimate_ratio = estimate_ratio.max(match f.stats.error_estimate {
+                Some(b) if b > 0.0 => e / b,
+                Some(_) if e == 0.0 => 0.0,
+                _ => f64::INFINITY,
+            });
             within += usize::from(e <= 1e-3);
             let t = Instant::now();
             let g = blend.solve_interactive(w, 1)?;
@@ -173,6 +180,7 @@ fn rig_row(name: &str, shapes: &ShapeSet, face: bool, changes: usize) -> anyhow:
                 "interactive_error_worst": worst(&fast_error),
                 "interactive_within_1e-3": within,
                 "interactive_error_over_estimate": over_estimate,
+                "interactive_error_over_estimate_worst_ratio": estimate_ratio,
                 "refined_median_s": median(refined.clone()),
                 "refined_worst_s": worst(&refined),
                 "refined_error_median": median(refined_error.clone()),

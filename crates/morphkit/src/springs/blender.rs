@@ -313,19 +313,25 @@ impl PhysicalBlend {
             let targets = self.rig.shapes.len() - 1;
             let mut space =
                 InteractiveSpace::new(snapshots, vec![0.0; targets], unconverged, diagonal, 0.0);
-            // The error estimate's data: each combination left out, each target checked
-            // between its snapshots.
+            // The error estimate's data: each combination left out, and with all of its
+            // pair's snapshots (held apart); each target checked between its snapshots.
             let indices: Vec<usize> = (0..space.len()).collect();
             let errors = self.map_frames(&indices, threads, |f, &k| {
-                match space.snapshots[k].active.len() {
-                    1 => 0.0,
-                    _ => f
-                        .rig
-                        .interactive_error(f.ws, &space, &space.snapshots[k], Some(k)),
+                let truth = &space.snapshots[k];
+                if truth.active.len() == 1 {
+                    return (0.0, 0.0);
                 }
+                let left_out = f.rig.interactive_error(f.ws, &space, truth, &[k]);
+                let pair: Vec<usize> = (0..space.len())
+                    .filter(|&j| space.snapshots[j].active == truth.active)
+                    .collect();
+                (
+                    left_out,
+                    f.rig.interactive_error(f.ws, &space, truth, &pair),
+                )
             });
             for (s, e) in space.snapshots.iter_mut().zip(errors) {
-                s.left_out = e.unwrap_or(f64::INFINITY);
+                (s.left_out, s.apart) = e.unwrap_or((f64::INFINITY, f64::INFINITY));
             }
             let checks: Vec<(usize, f64)> = (1..=targets)
                 .flat_map(|s| CHECKS.iter().map(move |&a| (s, a)))
@@ -336,7 +342,7 @@ impl PhysicalBlend {
                 c[0] = 1.0 - a;
                 c[s] = a;
                 match f.rig.snapshot(f.ws, &c) {
-                    Some(truth) => f.rig.interactive_error(f.ws, &space, &truth, None),
+                    Some(truth) => f.rig.interactive_error(f.ws, &space, &truth, &[]),
                     None => f64::INFINITY,
                 }
             });

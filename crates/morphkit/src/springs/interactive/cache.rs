@@ -1,11 +1,12 @@
 //! A prepared [`InteractiveSpace`] as bytes, so that reopening a rig costs a file read instead
 //! of the preparation's solves (issue 38).
 //!
-//! Layout (little-endian): the magic `MKINTER3`; the rig's key (`u64`, [`Rig::cache_key`]);
+//! Layout (little-endian): the magic `MKINTER4`; the rig's key (`u64`, [`Rig::cache_key`]);
 //! the shape count $n$, free-coordinate count $n_f$ and vertex count $n_v$; the unconverged
 //! count; the diagonal; the preparation's seconds; the $n - 1$ checked errors; the snapshot
 //! count, then per snapshot its $n$ coefficients, its active targets (count, then indices),
-//! its left-out error and its $n_f$ correction values; then, per target and per sample
+//! its left-out error, its error held apart (version 3 had none, so its estimates are refused)
+//! and its $n_f$ correction values; then, per target and per sample
 //! ([`SAMPLES`](crate::springs::sampled_start::SAMPLES)), the sampled start's correction
 //! field: a tag (0 not computed, 1 did not converge, 2 stored) and, for 2, its $3 n_v$
 //! values; then, the same way, every pair's field ($t = 2 … n-1$, then $s = 1 … t-1$; version 2
@@ -21,7 +22,7 @@ use crate::springs::sampled_start::{pair_count, Field, StartSamples, SAMPLES};
 use crate::springs::terms::EnergyTerm;
 use crate::springs::BlendError;
 
-const MAGIC: &[u8; 8] = b"MKINTER3";
+const MAGIC: &[u8; 8] = b"MKINTER4";
 
 impl Rig {
     /// A fingerprint of everything an interactive space depends on: every shape's positions
@@ -92,7 +93,7 @@ pub(in crate::springs) fn encode(
     key: u64,
     [n, nf, nv]: [usize; 3],
 ) -> Vec<u8> {
-    let per = 8 * (2 * n + nf + 4);
+    let per = 8 * (2 * n + nf + 5);
     let fields = 8 * ((n - 1) * SAMPLES.len() + pair_count(n - 1)) * (1 + 3 * nv);
     let mut out = Vec::with_capacity(72 + 8 * n + per * space.snapshots.len() + fields);
     out.extend_from_slice(MAGIC);
@@ -117,6 +118,7 @@ pub(in crate::springs) fn encode(
         word(&mut out, s.active.len() as u64);
         s.active.iter().for_each(|&a| word(&mut out, a as u64));
         word(&mut out, s.left_out.to_bits());
+        word(&mut out, s.apart.to_bits());
         s.d.iter().for_each(|x| word(&mut out, x.to_bits()));
     }
     let put = |out: &mut Vec<u8>, cell: Option<&Field>| match cell {
@@ -198,12 +200,14 @@ pub(in crate::springs) fn decode(
             active.push(a);
         }
         let left_out = r.float()?;
+        let apart = r.float()?;
         let d = (0..nf).map(|_| r.float()).collect::<Result<Vec<_>, _>>()?;
         snapshots.push(Snapshot {
             c,
             active,
             d,
             left_out,
+            apart,
         });
     }
     let cell =

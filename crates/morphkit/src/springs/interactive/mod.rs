@@ -41,6 +41,11 @@ pub(super) struct Snapshot {
     /// The interactive shape's distance from this equilibrium when the snapshot itself is
     /// left out of the space (fraction of the diagonal; the error estimate's data).
     pub left_out: f64,
+    /// For a pair's snapshot: the interactive shape's distance from this equilibrium when
+    /// every snapshot of the pair is left out (the space then holds the two targets apart,
+    /// no interaction of them); 0 for a single target's. The error estimate's data for frames
+    /// of three or more targets, whose own interactions the space never holds.
+    pub apart: f64,
 }
 
 /// The single-target weights at which the preparation checks the space (between the
@@ -148,25 +153,42 @@ impl InteractiveSpace {
         self.snapshots.is_empty()
     }
 
-    /// The snapshots whose targets are all active in coefficients `c`, but `exclude`.
-    fn columns(&self, c: &[f64], exclude: Option<usize>) -> Vec<usize> {
+    /// The snapshots whose targets are all active in coefficients `c`, but those in
+    /// `exclude`.
+    fn columns(&self, c: &[f64], exclude: &[usize]) -> Vec<usize> {
         (0..self.snapshots.len())
-            .filter(|&k| Some(k) != exclude)
+            .filter(|k| !exclude.contains(k))
             .filter(|&k| self.snapshots[k].active.iter().all(|&s| c[s] != 0.0))
             .collect()
     }
 
     /// The error estimate of a frame with coefficients `c` whose space is snapshots `cols`:
     /// the largest checked error of its active targets and leave-one-out error of its
-    /// combinations (`None` without snapshots).
+    /// combinations; with three or more active targets, also the largest error of its pairs
+    /// held apart ([`Snapshot::apart`]), scaled by the pair's weights' product over ¼ where
+    /// that is larger than 1: the space holds no interaction of more than two targets, and a
+    /// pair without its own snapshots is the measured case of an interaction the space lacks
+    /// (`None` without snapshots).
     fn estimate(&self, c: &[f64], cols: &[usize]) -> Option<f64> {
         if cols.is_empty() {
             return None;
         }
+        let many = (1..c.len()).filter(|&s| c[s] != 0.0).count() >= 3;
         let combos = cols
             .iter()
             .filter(|&&k| self.snapshots[k].active.len() > 1)
-            .map(|&k| self.snapshots[k].left_out);
+            .map(|&k| {
+                let s = &self.snapshots[k];
+                if many {
+                    // An interaction of two targets grows with the product of their weights
+                    // (the second-order term of the equilibrium in the weights): held apart
+                    // at (½, ½), scaled to this frame's, never below the measured value.
+                    let w: f64 = s.active.iter().map(|&t| c[t].abs()).product();
+                    s.left_out.max(s.apart * (4.0 * w).max(1.0))
+                } else {
+                    s.left_out
+                }
+            });
         let singles = (1..c.len())
             .filter(|&s| c[s] != 0.0)
             .map(|s| self.checked.get(s - 1).copied().unwrap_or(f64::INFINITY));
@@ -194,18 +216,19 @@ impl Rig {
             active,
             d,
             left_out: 0.0,
+            apart: 0.0,
         })
     }
 
     /// The interactive shape's distance from the equilibrium `truth` (a snapshot's data),
-    /// with snapshot `exclude` left out of the space (fraction of the diagonal; infinite
+    /// with the snapshots `exclude` left out of the space (fraction of the diagonal; infinite
     /// where a solve fails).
     pub(super) fn interactive_error(
         &self,
         ws: &mut Workspace,
         space: &InteractiveSpace,
         truth: &Snapshot,
-        exclude: Option<usize>,
+        exclude: &[usize],
     ) -> f64 {
         let Ok((_, x)) = self.interactive_state(ws, space, &truth.c, 0, exclude) else {
             return f64::INFINITY;

@@ -147,18 +147,18 @@ impl Rig {
         c: &[f64],
         refine: usize,
     ) -> Result<BlendResult, BlendError> {
-        Ok(self.interactive_state(ws, space, c, refine, None)?.0)
+        Ok(self.interactive_state(ws, space, c, refine, &[])?.0)
     }
 
-    /// [`solve_interactive`](Self::solve_interactive) with snapshot `exclude` left out of
-    /// the space, also giving the final iterate in solver coordinates (`3 #V`).
+    /// [`solve_interactive`](Self::solve_interactive) with the snapshots `exclude` left out
+    /// of the space, also giving the final iterate in solver coordinates (`3 #V`).
     pub(super) fn interactive_state(
         &self,
         ws: &mut Workspace,
         space: &InteractiveSpace,
         c: &[f64],
         refine: usize,
-        exclude: Option<usize>,
+        exclude: &[usize],
     ) -> Result<(BlendResult, Vec<f64>), BlendError> {
         let started = Instant::now();
         let frame = self.frame_energy(c, &[], true, false);
@@ -361,6 +361,49 @@ mod tests {
     use nalgebra::DMatrix;
 
     #[test]
+    fn the_pairs_held_apart_count_only_in_frames_of_three_or_more_targets() {
+        // Targets 1–3; a snapshot per target and one per pair (1, 2) and (2, 3), with
+        // made-up left-out and held-apart errors.
+        let snap = |active: Vec<usize>, left_out: f64, apart: f64| {
+            let mut c = vec![0.0; 4];
+            active.iter().for_each(|&s| c[s] = 0.5);
+            Snapshot {
+                c,
+                active,
+                d: vec![1.0; 4],
+                left_out,
+                apart,
+            }
+        };
+        let snapshots = vec![
+            snap(vec![1], 0.0, 0.0),
+            snap(vec![2], 0.0, 0.0),
+            snap(vec![3], 0.0, 0.0),
+            snap(vec![1, 2], 0.002, 0.009),
+            snap(vec![2, 3], 0.001, 0.004),
+        ];
+        let space = InteractiveSpace::new(snapshots, vec![0.003, 0.001, 0.002], 0, 1.0, 0.0);
+        let estimate = |c: [f64; 4]| {
+            let cols = space.columns(&c, &[]);
+            space.estimate(&c, &cols).unwrap()
+        };
+        // One target: its checked error; two: also their pair's left-out error.
+        assert_eq!(estimate([0.5, 0.0, 0.5, 0.0]), 0.001);
+        assert_eq!(estimate([0.0, 0.5, 0.5, 0.0]), 0.003);
+        assert_eq!(estimate([0.0, 0.0, 0.5, 0.5]), 0.002);
+        // Three: each of their pairs also held apart, scaled by the product of the pair's
+        // weights over ¼ where that is above 1.
+        assert_eq!(estimate([-0.5, 0.5, 0.5, 0.5]), 0.009);
+        assert_eq!(estimate([-0.3, 0.4, 0.5, 0.4]), 0.009);
+        assert!((estimate([-1.7, 0.9, 0.9, 0.9]) - 0.009 * 4.0 * 0.81).abs() < 1e-15);
+        // A left-out snapshot is not counted.
+        assert_eq!(
+            space.columns(&[-0.5, 0.5, 0.5, 0.5], &[3, 4]),
+            vec![0, 1, 2]
+        );
+    }
+
+    #[test]
     fn subspace_from_prepared_gram_is_orthonormal_without_held_coordinates() {
         // Five made-up snapshots over 2600 coordinates (more than one Gram block), one a
         // combination of two others, so that one direction is dropped.
@@ -379,6 +422,7 @@ mod tests {
                 active: vec![1],
                 d,
                 left_out: 0.0,
+                apart: 0.0,
             })
             .collect();
         let space = InteractiveSpace::new(snapshots, vec![0.0], 0, 1.0, 0.0);
