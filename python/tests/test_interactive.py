@@ -26,7 +26,7 @@ def test_close_to_the_full_solve_within_its_estimate(rig):
     V, T, F = rig
     b = morphkit.PhysicalBlend(V, T, F)
     info = b.prepare_interactive(threads=2)
-    assert info["snapshots"] == 8 and info["unconverged"] == 0 and not info["loaded"]
+    assert info["snapshots"] == 16 and info["unconverged"] == 0 and not info["loaded"]
     d = diag(V)
     for w in ([0.4, 0.3], [0.7, 0.0], [0.2, 0.6]):
         full = b.solve(w)

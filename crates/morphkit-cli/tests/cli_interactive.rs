@@ -53,7 +53,7 @@ fn interactive_frames_are_within_their_estimate_and_the_cache_is_reused() {
     let r = report(&ri);
     assert_eq!(r["method"], "interactive");
     assert_eq!(r["interactive"]["loaded"], false);
-    assert_eq!(r["interactive"]["snapshots"], 3);
+    assert_eq!(r["interactive"]["snapshots"], 7);
     assert!(cache.is_file());
     let b = vertices(&base);
     let diag = {

@@ -33,8 +33,8 @@ fn rig() -> ShapeSet {
 fn prepared(threads: usize) -> PhysicalBlend {
     let mut blend = PhysicalBlend::new(&rig(), &BlendOptions::default()).unwrap();
     let space = blend.prepare_interactive(threads);
-    // 2 targets: 3 samples each and 2 for the pair.
-    assert_eq!(space.len() + space.unconverged, 8);
+    // 2 targets: one snapshot at every eighth each and 2 for the pair.
+    assert_eq!(space.len() + space.unconverged, 16);
     assert_eq!(space.unconverged, 0);
     blend
 }
@@ -132,7 +132,7 @@ fn a_saved_preparation_gives_the_same_bits_and_is_refused_for_another_rig() {
     let mut reopened = PhysicalBlend::new(&rig(), &BlendOptions::default()).unwrap();
     assert!(reopened.interactive_bytes().is_none());
     let space = reopened.load_interactive(&bytes).unwrap();
-    assert_eq!(space.len(), 8);
+    assert_eq!(space.len(), 16);
     assert_eq!(reopened.interactive_bytes().unwrap(), bytes);
     for w in [[0.4, 0.3], [0.7, 0.0], [0.0, 0.2], [1.0, 0.0]] {
         let weights = Weights::Delta(w.to_vec());
@@ -243,8 +243,8 @@ fn rig3() -> ShapeSet {
 fn with_three_targets_the_estimate_counts_the_pairs_held_apart_and_bounds_the_error() {
     let mut blend = PhysicalBlend::new(&rig3(), &BlendOptions::default()).unwrap();
     let space = blend.prepare_interactive(2);
-    // 3 targets: 3 samples each, 2 per pair.
-    assert_eq!(space.len(), 15);
+    // 3 targets: 7 each, 2 per pair.
+    assert_eq!(space.len(), 27);
     let diag = bbox_diagonal(blend.shapes().positions(0));
     let bytes = blend.interactive_bytes().unwrap();
     let mut reopened = PhysicalBlend::new(&rig3(), &BlendOptions::default()).unwrap();

@@ -24,7 +24,7 @@ fn check(name: &str, s: &ShapeSet, states: &[Vec<f64>]) {
     let mut blend = PhysicalBlend::new(s, &BlendOptions::default()).unwrap();
     let space = blend.prepare_interactive(2);
     let k = s.len() - 1;
-    assert_eq!(space.len() + space.unconverged, 3 * k + k * (k - 1));
+    assert_eq!(space.len() + space.unconverged, 7 * k + k * (k - 1));
     assert_eq!(space.unconverged, 0, "{name}");
     let diag = bbox_diagonal(s.positions(0));
     for t in 0..k {

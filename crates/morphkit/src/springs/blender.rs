@@ -311,27 +311,49 @@ impl PhysicalBlend {
             }
             let diagonal = crate::mesh::bbox_diagonal(self.rig.shapes.positions(0));
             let targets = self.rig.shapes.len() - 1;
-            let mut space =
-                InteractiveSpace::new(snapshots, vec![0.0; targets], unconverged, diagonal, 0.0);
+            let zeros = vec![0.0; targets];
+            let mut space = InteractiveSpace::new(
+                snapshots,
+                [zeros.clone(), zeros],
+                unconverged,
+                diagonal,
+                0.0,
+            );
             // The error estimate's data: each combination left out, and with all of its
-            // pair's snapshots (held apart); each target checked between its snapshots.
+            // pair's snapshots (held apart); each target's snapshots off the coarse weights
+            // against the coarse ones alone (frames of several targets); each target checked
+            // between its snapshots (frames of one).
             let indices: Vec<usize> = (0..space.len()).collect();
             let errors = self.map_frames(&indices, threads, |f, &k| {
                 let truth = &space.snapshots[k];
-                if truth.active.len() == 1 {
-                    return (0.0, 0.0);
-                }
-                let left_out = f.rig.interactive_error(f.ws, &space, truth, &[k]);
-                let pair: Vec<usize> = (0..space.len())
+                let same: Vec<usize> = (0..space.len())
                     .filter(|&j| space.snapshots[j].active == truth.active)
                     .collect();
+                if truth.active.len() == 1 {
+                    if !truth.fine() {
+                        return (0.0, 0.0);
+                    }
+                    let fine: Vec<usize> = same
+                        .into_iter()
+                        .filter(|&j| space.snapshots[j].fine())
+                        .collect();
+                    return (f.rig.interactive_error(f.ws, &space, truth, &fine), 0.0);
+                }
+                let left_out = f.rig.interactive_error(f.ws, &space, truth, &[k]);
                 (
                     left_out,
-                    f.rig.interactive_error(f.ws, &space, truth, &pair),
+                    f.rig.interactive_error(f.ws, &space, truth, &same),
                 )
             });
-            for (s, e) in space.snapshots.iter_mut().zip(errors) {
-                (s.left_out, s.apart) = e.unwrap_or((f64::INFINITY, f64::INFINITY));
+            for (k, e) in errors.into_iter().enumerate() {
+                let e = e.unwrap_or((f64::INFINITY, f64::INFINITY));
+                let s = &mut space.snapshots[k];
+                if s.active.len() == 1 {
+                    let t = s.active[0] - 1;
+                    space.checked_many[t] = space.checked_many[t].max(e.0);
+                } else {
+                    (s.left_out, s.apart) = e;
+                }
             }
             let checks: Vec<(usize, f64)> = (1..=targets)
                 .flat_map(|s| CHECKS.iter().map(move |&a| (s, a)))

@@ -1,9 +1,10 @@
 //! A prepared [`InteractiveSpace`] as bytes, so that reopening a rig costs a file read instead
 //! of the preparation's solves (issue 38).
 //!
-//! Layout (little-endian): the magic `MKINTER4`; the rig's key (`u64`, [`Rig::cache_key`]);
+//! Layout (little-endian): the magic `MKINTER5`; the rig's key (`u64`, [`Rig::cache_key`]);
 //! the shape count $n$, free-coordinate count $n_f$ and vertex count $n_v$; the unconverged
-//! count; the diagonal; the preparation's seconds; the $n - 1$ checked errors; the snapshot
+//! count; the diagonal; the preparation's seconds; the $n - 1$ checked errors of frames of one target, then of
+//! frames of several (version 4 had one list, and each target's snapshots only at ¼, ½, ¾); the snapshot
 //! count, then per snapshot its $n$ coefficients, its active targets (count, then indices),
 //! its left-out error, its error held apart (version 3 had none, so its estimates are refused)
 //! and its $n_f$ correction values; then, per target and per sample
@@ -22,7 +23,7 @@ use crate::springs::sampled_start::{pair_count, Field, StartSamples, SAMPLES};
 use crate::springs::terms::EnergyTerm;
 use crate::springs::BlendError;
 
-const MAGIC: &[u8; 8] = b"MKINTER4";
+const MAGIC: &[u8; 8] = b"MKINTER5";
 
 impl Rig {
     /// A fingerprint of everything an interactive space depends on: every shape's positions
@@ -109,7 +110,7 @@ pub(in crate::springs) fn encode(
     }
     word(&mut out, space.diagonal.to_bits());
     word(&mut out, space.prepare_seconds.to_bits());
-    for e in &space.checked {
+    for e in space.checked.iter().chain(&space.checked_many) {
         word(&mut out, e.to_bits());
     }
     word(&mut out, space.snapshots.len() as u64);
@@ -177,6 +178,7 @@ pub(in crate::springs) fn decode(
     let diagonal = r.float()?;
     let prepare_seconds = r.float()?;
     let checked = (1..n).map(|_| r.float()).collect::<Result<Vec<_>, _>>()?;
+    let checked_many = (1..n).map(|_| r.float()).collect::<Result<Vec<_>, _>>()?;
     let count = r.word()? as usize;
     if count > bytes.len() / 8 {
         return Err(r.truncated());
@@ -247,7 +249,13 @@ pub(in crate::springs) fn decode(
             bytes.len() - r.at
         )));
     }
-    let space = InteractiveSpace::new(snapshots, checked, unconverged, diagonal, prepare_seconds);
+    let space = InteractiveSpace::new(
+        snapshots,
+        [checked, checked_many],
+        unconverged,
+        diagonal,
+        prepare_seconds,
+    );
     Ok((space, fields, pairs))
 }
 

@@ -3,9 +3,15 @@
 //!
 //! **Preparation** ([`PhysicalBlend::prepare_interactive`](super::PhysicalBlend::prepare_interactive)).
 //! Canonical solves at *snapshot* weights ([`snapshot_coefficients`]): every target at
-//! ¼, ½, ¾ (the sampled start's own samples) and every pair of targets at (½, ½) and
-//! (0.3, 0.3). Each gives a correction $d_j = x^*(c_j) - P(c_j)$ over the free coordinates,
-//! with the set of targets it involves.
+//! every eighth ([`SINGLES`]; ¼, ½, ¾ are the sampled start's own samples) and every pair of
+//! targets at (½, ½) and (0.3, 0.3). Each gives a correction $d_j = x^*(c_j) - P(c_j)$ over
+//! the free coordinates, with the set of targets it involves. A frame of one target uses all
+//! seven of its snapshots; a frame of several uses each target's at ¼, ½, ¾ ([`COARSE`]) and
+//! the pairs'. Every eighth, because the canonical solve of one target is not a smooth
+//! function of its weight on real rigs: over some weight ranges it settles in another of the
+//! energy's minima than at the snapshots around (horse pose 1 from 0.55 to 0.65, ICT
+//! eyeBlink_R near 0.6), and a space of ¼, ½, ¾ alone missed it there by up to 0.9 % of the
+//! diagonal (docs/performance.md, "7 December").
 //!
 //! **A slider change** ([`Rig::solve_interactive`]). With the frame's energy $E$ exactly as in
 //! the full solve ([`super::frame`]) and its affine start $x_0$ (the predictor plus each
@@ -48,16 +54,47 @@ pub(super) struct Snapshot {
     pub apart: f64,
 }
 
-/// The single-target weights at which the preparation checks the space (between the
-/// snapshots' ¼, ½, ¾): the error estimate of a frame with that target active.
-pub(super) const CHECKS: [f64; 4] = [0.125, 0.375, 0.625, 0.875];
+/// The weights of each target's single-target snapshots: every eighth. A frame of that target
+/// alone uses them all; a frame of several targets only those at [`COARSE`] (with all of them,
+/// a three-expression face change would take 27 columns instead of 15).
+pub(super) const SINGLES: [f64; 7] = [0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875];
+
+/// The single-target snapshot weights that frames of several targets use.
+pub(super) const COARSE: [f64; 3] = [0.25, 0.5, 0.75];
+
+/// The single-target weights at which the preparation checks a target's frames against the
+/// full solve (halfway between its snapshots, and between the ends and the nearest ones):
+/// the error estimate of a frame of that target alone.
+pub(super) const CHECKS: [f64; 8] = [
+    0.0625, 0.1875, 0.3125, 0.4375, 0.5625, 0.6875, 0.8125, 0.9375,
+];
+
+impl Snapshot {
+    /// Whether this is a single target's snapshot off the [`COARSE`] weights (only frames of
+    /// that target alone use it).
+    pub(super) fn fine(&self) -> bool {
+        self.active.len() == 1 && !COARSE.contains(&self.c[self.active[0]])
+    }
+}
+
+/// The least error estimate of a frame that is not exact (fraction of the diagonal): the
+/// accuracy to which the canonical equilibrium itself is defined (its gradient tolerance moves
+/// it by about this much; the continuity check's floor). Below it the checks measure the full
+/// solves' round-off: with every eighth a snapshot, a generated rig's frame at 0.6 was 1.6e-7
+/// from its full solve against checks of 1.1e-7.
+pub(super) const CANONICAL_ACCURACY: f64 = 1e-6;
 
 /// A rig's prepared interactive space (see the [module docs](self)).
 pub struct InteractiveSpace {
     pub(super) snapshots: Vec<Snapshot>,
     /// Per target (index `s - 1`): the largest error of the interactive shape against the
-    /// full solve at the [`CHECKS`] weights (fraction of the diagonal).
+    /// full solve at the [`CHECKS`] weights (fraction of the diagonal); the estimate of a
+    /// frame of that target alone.
     pub(super) checked: Vec<f64>,
+    /// Per target: the largest error at its snapshots off [`COARSE`] with only its
+    /// [`COARSE`] snapshots in the space, as in a frame of several targets; such a frame's
+    /// estimate counts it for each active target.
+    pub(super) checked_many: Vec<f64>,
     /// Snapshot solves that did not converge (left out of the space).
     pub unconverged: usize,
     /// The base shape's bounding-box diagonal.
@@ -70,8 +107,8 @@ pub struct InteractiveSpace {
     pub(super) gram: DMatrix<f64>,
 }
 
-/// The snapshot coefficient vectors of an `n`-shape rig: every target at ¼, ½, ¾, every pair
-/// at (½, ½) and (0.3, 0.3); the base takes the rest.
+/// The snapshot coefficient vectors of an `n`-shape rig: every target at each of [`SINGLES`],
+/// every pair at (½, ½) and (0.3, 0.3); the base takes the rest.
 pub(super) fn snapshot_coefficients(n: usize) -> Vec<Vec<f64>> {
     let coeffs = |pairs: &[(usize, f64)]| {
         let mut c = vec![0.0; n];
@@ -83,7 +120,7 @@ pub(super) fn snapshot_coefficients(n: usize) -> Vec<Vec<f64>> {
     };
     let mut out = Vec::new();
     for s in 1..n {
-        for a in [0.25, 0.5, 0.75] {
+        for a in SINGLES {
             out.push(coeffs(&[(s, a)]));
         }
     }
@@ -116,6 +153,7 @@ impl std::fmt::Debug for InteractiveSpace {
         f.debug_struct("InteractiveSpace")
             .field("snapshots", &self.snapshots.len())
             .field("checked", &self.checked)
+            .field("checked_many", &self.checked_many)
             .field("unconverged", &self.unconverged)
             .field("diagonal", &self.diagonal)
             .field("prepare_seconds", &self.prepare_seconds)
@@ -124,10 +162,11 @@ impl std::fmt::Debug for InteractiveSpace {
 }
 
 impl InteractiveSpace {
-    /// The space of `snapshots` with the error estimate's data `checked` (see the fields).
+    /// The space of `snapshots` with the error estimate's data `[checked, checked_many]` (see
+    /// the fields).
     pub(super) fn new(
         snapshots: Vec<Snapshot>,
-        checked: Vec<f64>,
+        [checked, checked_many]: [Vec<f64>; 2],
         unconverged: usize,
         diagonal: f64,
         prepare_seconds: f64,
@@ -136,6 +175,7 @@ impl InteractiveSpace {
         Self {
             snapshots,
             checked,
+            checked_many,
             unconverged,
             diagonal,
             prepare_seconds,
@@ -154,21 +194,25 @@ impl InteractiveSpace {
     }
 
     /// The snapshots whose targets are all active in coefficients `c`, but those in
-    /// `exclude`.
+    /// `exclude`; with several active targets, of their single-target snapshots only those at
+    /// [`COARSE`] weights.
     fn columns(&self, c: &[f64], exclude: &[usize]) -> Vec<usize> {
+        let many = (1..c.len()).filter(|&s| c[s] != 0.0).count() > 1;
         (0..self.snapshots.len())
             .filter(|k| !exclude.contains(k))
             .filter(|&k| self.snapshots[k].active.iter().all(|&s| c[s] != 0.0))
+            .filter(|&k| !many || !self.snapshots[k].fine())
             .collect()
     }
 
     /// The error estimate of a frame with coefficients `c` whose space is snapshots `cols`:
-    /// the largest checked error of its active targets and leave-one-out error of its
+    /// the largest checked error of its active targets (of frames of one target or of
+    /// several, as this one) and leave-one-out error of its
     /// combinations; with three or more active targets, also the largest error of its pairs
     /// held apart ([`Snapshot::apart`]), scaled by the pair's weights' product over ¼ where
     /// that is larger than 1: the space holds no interaction of more than two targets, and a
-    /// pair without its own snapshots is the measured case of an interaction the space lacks
-    /// (`None` without snapshots).
+    /// pair without its own snapshots is the measured case of an interaction the space lacks;
+    /// never under [`CANONICAL_ACCURACY`] (`None` without snapshots).
     fn estimate(&self, c: &[f64], cols: &[usize]) -> Option<f64> {
         if cols.is_empty() {
             return None;
@@ -189,10 +233,16 @@ impl InteractiveSpace {
                     s.left_out
                 }
             });
-        let singles = (1..c.len())
-            .filter(|&s| c[s] != 0.0)
-            .map(|s| self.checked.get(s - 1).copied().unwrap_or(f64::INFINITY));
-        combos.chain(singles).reduce(f64::max)
+        let active = (1..c.len()).filter(|&s| c[s] != 0.0);
+        let checked = match active.clone().count() {
+            1 => &self.checked,
+            _ => &self.checked_many,
+        };
+        let singles = active.map(|s| checked.get(s - 1).copied().unwrap_or(f64::INFINITY));
+        combos
+            .chain(singles)
+            .reduce(f64::max)
+            .map(|e| e.max(CANONICAL_ACCURACY))
     }
 }
 

@@ -362,11 +362,11 @@ mod tests {
 
     #[test]
     fn the_pairs_held_apart_count_only_in_frames_of_three_or_more_targets() {
-        // Targets 1–3; a snapshot per target and one per pair (1, 2) and (2, 3), with
-        // made-up left-out and held-apart errors.
-        let snap = |active: Vec<usize>, left_out: f64, apart: f64| {
+        // Targets 1–3; a snapshot per target at ½ (and target 1's at ⅛, a fine one), one per
+        // pair (1, 2) and (2, 3), with made-up left-out and held-apart errors.
+        let snap = |active: Vec<usize>, a: f64, left_out: f64, apart: f64| {
             let mut c = vec![0.0; 4];
-            active.iter().for_each(|&s| c[s] = 0.5);
+            active.iter().for_each(|&s| c[s] = a);
             Snapshot {
                 c,
                 active,
@@ -376,21 +376,28 @@ mod tests {
             }
         };
         let snapshots = vec![
-            snap(vec![1], 0.0, 0.0),
-            snap(vec![2], 0.0, 0.0),
-            snap(vec![3], 0.0, 0.0),
-            snap(vec![1, 2], 0.002, 0.009),
-            snap(vec![2, 3], 0.001, 0.004),
+            snap(vec![1], 0.5, 0.0, 0.0),
+            snap(vec![2], 0.5, 0.0, 0.0),
+            snap(vec![3], 0.5, 0.0, 0.0),
+            snap(vec![1, 2], 0.5, 0.002, 0.009),
+            snap(vec![2, 3], 0.5, 0.001, 0.004),
+            snap(vec![1], 0.125, 0.0, 0.0),
         ];
-        let space = InteractiveSpace::new(snapshots, vec![0.003, 0.001, 0.002], 0, 1.0, 0.0);
+        let checked = [vec![0.003, 0.001, 0.002], vec![0.0035, 0.0012, 0.0025]];
+        let space = InteractiveSpace::new(snapshots, checked, 0, 1.0, 0.0);
         let estimate = |c: [f64; 4]| {
             let cols = space.columns(&c, &[]);
             space.estimate(&c, &cols).unwrap()
         };
-        // One target: its checked error; two: also their pair's left-out error.
+        // One target: its checked error of frames of one target, with every snapshot of it.
         assert_eq!(estimate([0.5, 0.0, 0.5, 0.0]), 0.001);
-        assert_eq!(estimate([0.0, 0.5, 0.5, 0.0]), 0.003);
-        assert_eq!(estimate([0.0, 0.0, 0.5, 0.5]), 0.002);
+        assert_eq!(estimate([0.5, 0.5, 0.0, 0.0]), 0.003);
+        assert_eq!(space.columns(&[0.5, 0.5, 0.0, 0.0], &[]), vec![0, 5]);
+        // Two: the checked errors of frames of several targets, their pair's left-out error,
+        // and no fine single-target snapshot.
+        assert_eq!(estimate([0.0, 0.5, 0.5, 0.0]), 0.0035);
+        assert_eq!(estimate([0.0, 0.0, 0.5, 0.5]), 0.0025);
+        assert_eq!(space.columns(&[0.0, 0.5, 0.5, 0.0], &[]), vec![0, 1, 3]);
         // Three: each of their pairs also held apart, scaled by the product of the pair's
         // weights over ¼ where that is above 1.
         assert_eq!(estimate([-0.5, 0.5, 0.5, 0.5]), 0.009);
@@ -425,7 +432,7 @@ mod tests {
                 apart: 0.0,
             })
             .collect();
-        let space = InteractiveSpace::new(snapshots, vec![0.0], 0, 1.0, 0.0);
+        let space = InteractiveSpace::new(snapshots, [vec![0.0], vec![0.0]], 0, 1.0, 0.0);
         let cols = [0, 1, 2, 4];
         let held: Vec<usize> = (0..nf).step_by(97).collect();
         let sub = Subspace::new(&space, &cols, &held, Vec::new());
