@@ -16,7 +16,8 @@
 //! vertex distance over the bounding-box diagonal), and the same for the interactive mode
 //! ([`PhysicalBlend::solve_interactive`], prepared once, timed as `prepare_interactive_s`)
 //! without and with one refinement step, with how many states stayed within 1e-3 of the
-//! diagonal, how many exceeded their own error estimate and by what largest ratio. One thread, so the numbers are those of an
+//! diagonal, how many exceeded their own error estimate (listed: nonzero weights, error,
+//! estimate) and by what largest ratio. One thread, so the numbers are those of an
 //! interactive session on one core.
 
 use morphkit::io::read_mesh;
@@ -136,10 +137,11 @@ fn rig_row(name: &str, shapes: &ShapeSet, face: bool, changes: usize) -> anyhow:
         let (mut fast, mut fast_error, mut refined, mut refined_error) =
             (vec![], vec![], vec![], vec![]);
         let (mut over_estimate, mut within) = (0, 0);
+        let mut over = Vec::new();
         // The largest error / estimate (0 where every estimate is 0 and met exactly).
         let mut estimate_ratio = 0.0f64;
         let mut unconverged = 0;
-        for (w, _) in all.iter().zip(&states).filter(|(_, s)| s.0 == kind) {
+        for (w, state) in all.iter().zip(&states).filter(|(_, s)| s.0 == kind) {
             let t = Instant::now();
             let p = blend.predict(w)?;
             preview.push(t.elapsed().as_secs_f64());
@@ -154,7 +156,21 @@ fn rig_row(name: &str, shapes: &ShapeSet, face: bool, changes: usize) -> anyhow:
             fast.push(t.elapsed().as_secs_f64());
             let e = max_distance(&f.positions, &r.positions) / diag;
             fast_error.push(e);
-            over_estimate += usize::from(f.stats.error_estimate.is_none_or(|b| e > b));
+            if f.stats.error_estimate.is_none_or(|b| e > b) {
+                over_estimate += 1;
+                let nonzero: Vec<Value> = state
+                    .1
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &a)| a != 0.0)
+                    .map(|(t, &a)| json!([t, a]))
+                    .collect();
+                over.push(json!({
+                    "weights": nonzero,
+                    "error": e,
+                    "estimate": f.stats.error_estimate,
+                }));
+            }
             estimate_ratio = estimate_ratio.max(match f.stats.error_estimate {
                 Some(b) if b > 0.0 => e / b,
                 Some(_) if e == 0.0 => 0.0,
@@ -186,6 +202,7 @@ fn rig_row(name: &str, shapes: &ShapeSet, face: bool, changes: usize) -> anyhow:
                 "interactive_within_1e-3": within,
                 "interactive_error_over_estimate": over_estimate,
                 "interactive_error_over_estimate_worst_ratio": estimate_ratio,
+                "interactive_over_estimate_states": over,
                 "refined_median_s": median(refined.clone()),
                 "refined_worst_s": worst(&refined),
                 "refined_error_median": median(refined_error.clone()),
