@@ -8,10 +8,10 @@
 //! the free coordinates, with the set of targets it involves. A frame of one target uses all
 //! seven of its snapshots; a frame of several uses each target's at ¼, ½, ¾ ([`COARSE`]) and
 //! the pairs'. Every eighth, because the canonical solve of one target is not a smooth
-//! function of its weight on real rigs: over some weight ranges it settles in another of the
-//! energy's minima than at the snapshots around (horse pose 1 from 0.55 to 0.65, ICT
-//! eyeBlink_R near 0.6), and a space of ¼, ½, ¾ alone missed it there by up to 0.9 % of the
-//! diagonal (docs/performance.md, "7 December").
+//! function of its weight on real rigs: over some weight ranges a very soft direction or a
+//! second minimum takes it where the snapshots around do not point (horse pose 1 from 0.55 to
+//! 0.65, ICT eyeBlink_R near 0.6), and a space of ¼, ½, ¾ alone missed it there by up to 0.9 %
+//! of the diagonal (docs/performance.md, "7 December").
 //!
 //! **A slider change** ([`Rig::solve_interactive`]). With the frame's energy $E$ exactly as in
 //! the full solve ([`super::frame`]) and its affine start $x_0$ (the predictor plus each
