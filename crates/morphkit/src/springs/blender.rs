@@ -3,7 +3,7 @@
 //! or many in parallel.
 
 use super::frame_solver::{report_lost, FrameSolver};
-use super::interactive::{decode, encode, snapshot_coefficients, InteractiveSpace, CHECKS};
+use super::interactive::{decode, encode, snapshot_coefficients, InteractiveSpace, CHECKS, COARSE};
 use super::options::{BlendOptions, BlendResult, RigSummary};
 use super::predictor::BlendPredictor;
 use super::rig::{Built, Rig};
@@ -301,20 +301,30 @@ impl PhysicalBlend {
             let started = std::time::Instant::now();
             let coefficients = snapshot_coefficients(self.rig.shapes.len());
             let solved = self.map_frames(&coefficients, threads, |f, c| f.rig.snapshot(f.ws, c));
+            let targets = self.rig.shapes.len() - 1;
             let mut snapshots = Vec::with_capacity(solved.len());
             let mut unconverged = 0;
-            for s in solved {
+            // A target whose snapshot off the coarse weights did not converge has no check
+            // for frames of several targets there: its estimate is unknown (infinite).
+            let mut checked_many = vec![0.0; targets];
+            for (s, c) in solved.into_iter().zip(&coefficients) {
                 match s {
                     Some(Some(s)) => snapshots.push(s),
-                    _ => unconverged += 1,
+                    _ => {
+                        unconverged += 1;
+                        let active: Vec<usize> = (1..c.len()).filter(|&t| c[t] != 0.0).collect();
+                        if let [t] = active[..] {
+                            if !COARSE.contains(&c[t]) {
+                                checked_many[t - 1] = f64::INFINITY;
+                            }
+                        }
+                    }
                 }
             }
             let diagonal = crate::mesh::bbox_diagonal(self.rig.shapes.positions(0));
-            let targets = self.rig.shapes.len() - 1;
-            let zeros = vec![0.0; targets];
             let mut space = InteractiveSpace::new(
                 snapshots,
-                [zeros.clone(), zeros],
+                [vec![0.0; targets], checked_many],
                 unconverged,
                 diagonal,
                 0.0,
