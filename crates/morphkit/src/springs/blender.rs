@@ -3,7 +3,9 @@
 //! or many in parallel.
 
 use super::frame_solver::{report_lost, FrameSolver};
-use super::interactive::{decode, encode, snapshot_coefficients, InteractiveSpace, CHECKS, COARSE};
+use super::interactive::{
+    decode, encode, fine_target, snapshot_coefficients, InteractiveSpace, CHECKS,
+};
 use super::options::{BlendOptions, BlendResult, RigSummary};
 use super::predictor::BlendPredictor;
 use super::rig::{Built, Rig};
@@ -312,11 +314,8 @@ impl PhysicalBlend {
                     Some(Some(s)) => snapshots.push(s),
                     _ => {
                         unconverged += 1;
-                        let active: Vec<usize> = (1..c.len()).filter(|&t| c[t] != 0.0).collect();
-                        if let [t] = active[..] {
-                            if !COARSE.contains(&c[t]) {
-                                checked_many[t - 1] = f64::INFINITY;
-                            }
+                        if let Some(t) = fine_target(c) {
+                            checked_many[t - 1] = f64::INFINITY;
                         }
                     }
                 }

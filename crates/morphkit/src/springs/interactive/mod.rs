@@ -69,11 +69,26 @@ pub(super) const CHECKS: [f64; 8] = [
     0.0625, 0.1875, 0.3125, 0.4375, 0.5625, 0.6875, 0.8125, 0.9375,
 ];
 
+/// The targets (shape indices ≥ 1) with a nonzero coefficient in `c`, ascending.
+pub(super) fn active_targets(c: &[f64]) -> impl Iterator<Item = usize> + Clone + '_ {
+    (1..c.len()).filter(|&s| c[s] != 0.0)
+}
+
+/// The target of coefficients `c` when they are a single target's off the [`COARSE`] weights
+/// (a snapshot that only frames of that target alone use).
+pub(super) fn fine_target(c: &[f64]) -> Option<usize> {
+    let mut active = active_targets(c);
+    match (active.next(), active.next()) {
+        (Some(t), None) if !COARSE.contains(&c[t]) => Some(t),
+        _ => None,
+    }
+}
+
 impl Snapshot {
     /// Whether this is a single target's snapshot off the [`COARSE`] weights (only frames of
     /// that target alone use it).
     pub(super) fn fine(&self) -> bool {
-        self.active.len() == 1 && !COARSE.contains(&self.c[self.active[0]])
+        fine_target(&self.c).is_some()
     }
 }
 
@@ -197,7 +212,7 @@ impl InteractiveSpace {
     /// `exclude`; with several active targets, of their single-target snapshots only those at
     /// [`COARSE`] weights.
     fn columns(&self, c: &[f64], exclude: &[usize]) -> Vec<usize> {
-        let many = (1..c.len()).filter(|&s| c[s] != 0.0).count() > 1;
+        let many = active_targets(c).nth(1).is_some();
         (0..self.snapshots.len())
             .filter(|k| !exclude.contains(k))
             .filter(|&k| self.snapshots[k].active.iter().all(|&s| c[s] != 0.0))
@@ -217,7 +232,7 @@ impl InteractiveSpace {
         if cols.is_empty() {
             return None;
         }
-        let many = (1..c.len()).filter(|&s| c[s] != 0.0).count() >= 3;
+        let many = active_targets(c).count() >= 3;
         let combos = cols
             .iter()
             .filter(|&&k| self.snapshots[k].active.len() > 1)
@@ -233,7 +248,7 @@ impl InteractiveSpace {
                     s.left_out
                 }
             });
-        let active = (1..c.len()).filter(|&s| c[s] != 0.0);
+        let active = active_targets(c);
         let checked = match active.clone().count() {
             1 => &self.checked,
             _ => &self.checked_many,
@@ -260,7 +275,7 @@ impl Rig {
         let diff: Vec<f64> = x.iter().zip(&p).map(|(a, b)| a - b).collect();
         let mut d = vec![0.0; self.system.num_free()];
         self.system.gather(&diff, &mut d);
-        let active = (1..c.len()).filter(|&s| c[s] != 0.0).collect();
+        let active = active_targets(c).collect();
         Some(Snapshot {
             c: c.to_vec(),
             active,
