@@ -75,9 +75,9 @@ fn states(targets: usize, changes: usize, face: bool, seed: u64) -> Vec<(&'stati
         }
         out.push(("combination", w));
     }
-    // Every target at weights across (0, 1): a target's canonical solve can settle in
-    // another minimum over a narrow range (horse pose 1 at 0.55–0.65), which a few random
-    // targets and weights missed.
+    // Every target at weights across (0, 1): a target's canonical solve can run along a very
+    // soft direction or jump over a narrow range (horse pose 1 at 0.55–0.65, welded ICT
+    // eyeBlink_R at 0.59), which a few random targets and weights missed.
     for t in 0..targets {
         for _ in 0..changes.div_ceil(2) {
             let mut w = vec![0.0; targets];

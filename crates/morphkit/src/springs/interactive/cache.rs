@@ -5,8 +5,8 @@
 //! the shape count $n$, free-coordinate count $n_f$ and vertex count $n_v$; the unconverged
 //! count; the diagonal; the preparation's seconds; the $n - 1$ checked errors of frames of
 //! one target, then the $n - 1$ of frames of several (version 4 had one list, and each
-//! target's snapshots only at ¼, ½, ¾); the snapshot count, then per snapshot its $n$ coefficients, its active targets (count, then indices),
-//! its left-out error, its error held apart (version 3 had none, so its estimates are refused)
+//! target's snapshots only at ¼, ½, ¾); the snapshot count, then per snapshot its $n$
+//! coefficients, its active targets (count, then indices), its left-out error, its error held apart (version 3 had none, so its estimates are refused)
 //! and its $n_f$ correction values; then, per target and per sample
 //! ([`SAMPLES`](crate::springs::sampled_start::SAMPLES)), the sampled start's correction
 //! field: a tag (0 not computed, 1 did not converge, 2 stored) and, for 2, its $3 n_v$
