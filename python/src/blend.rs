@@ -16,7 +16,7 @@ pub use crate::blend_args::{fixed_vertices, shape_set, volume_options, weight_ro
 use crate::dict::to_dict;
 use crate::errors::{chain, new_err, IntoPyResult, Kind};
 pub use crate::predictor::PyPredictor;
-use crate::weld::{shape_weld, unweld, unweld_stats, weld_fixed};
+use crate::weld::{shape_weld, unweld_frame, unweld_stats, weld_fixed};
 use morphkit::mesh::Weld;
 use morphkit::springs::{
     AnchorPlacement, BlendError, BlendOptions, FrameStats, InteractiveCacheUse, InteriorMode,
@@ -134,7 +134,7 @@ impl PyPhysicalBlend {
                 };
                 let r = b.solve_interactive(w, refine)?;
                 *lock(&self.last) = Some(unweld_stats(weld, r.stats));
-                Ok(unweld(weld, r.positions))
+                Ok(unweld_frame(weld, r.positions, w, self.targets + 1))
             })
             .py(Kind::Blend)?;
         Ok(to_array(py, &positions))
@@ -326,7 +326,7 @@ impl PyPhysicalBlend {
                 };
                 r.map(|(positions, stats)| {
                     *lock(&self.last) = Some(unweld_stats(weld, stats));
-                    unweld(weld, positions)
+                    unweld_frame(weld, positions, &w, self.targets + 1)
                 })
             })
             .py(Kind::Blend)?;
@@ -418,7 +418,8 @@ impl PyPhysicalBlend {
         })?;
         let frames: Vec<_> = frames
             .into_iter()
-            .map(|(p, _)| unweld(self.weld.as_deref(), p))
+            .zip(&rows)
+            .map(|((p, _), w)| unweld_frame(self.weld.as_deref(), p, w, self.targets + 1))
             .collect();
         Ok(to_array3(py, &frames, self.vertices))
     }

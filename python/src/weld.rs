@@ -35,6 +35,21 @@ pub(crate) fn unweld(weld: Option<&Weld>, positions: Vec<Point>) -> Vec<Point> {
     }
 }
 
+/// `positions` of one frame with weights `w` over `n` shapes in the input's layout: at a
+/// shape's own weights each copy keeps its own numbers ([`Weld::scatter_frame`]).
+pub(crate) fn unweld_frame(
+    weld: Option<&Weld>,
+    positions: Vec<Point>,
+    w: &morphkit::springs::Weights,
+    n: usize,
+) -> Vec<Point> {
+    match (weld, w.coefficients(n)) {
+        (Some(wd), Ok(c)) => wd.scatter_frame(&positions, &c),
+        (Some(wd), Err(_)) => wd.scatter(&positions),
+        (None, _) => positions,
+    }
+}
+
 /// Fixed vertex ids (input numbering, checked) in welded numbering.
 pub(crate) fn weld_fixed(weld: Option<&Weld>, fixed: FixedVertices) -> FixedVertices {
     match (weld, fixed) {

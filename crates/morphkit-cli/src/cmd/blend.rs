@@ -473,7 +473,8 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
                     if r.stats.clamped_springs > 0 {
                         clamped.push((k, r.stats.clamped_springs));
                     }
-                    let positions = weld.scatter(&r.positions);
+                    let c = w.coefficients(shapes.len())?;
+                    let positions = weld.scatter_frame(&r.positions, &c);
                     if a.report.is_some() {
                         row["physical"] = json!(blend_metrics(&shapes, &topology, w, &positions)?);
                         row["folds"] = json!(fold_metrics(&shapes, &topology, w, &positions)?);

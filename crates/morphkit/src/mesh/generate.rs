@@ -1,8 +1,9 @@
-//! Procedural test meshes: grids, tubes, bars, spheres, and a bend deformer.
+//! Procedural test meshes: grids, tubes, bars, spheres, a bend deformer, and rigs that provoke
+//! two equilibria (a turning head, a buckling sheet).
 //!
 //! All generated meshes are consistently oriented with outward normals (for closed ones).
 
-use super::{Point, TriMesh};
+use super::{Point, ShapeSet, TriMesh};
 
 /// A flat `nx × ny` grid of quads (each split into two triangles) spanning `[0, sx] × [0, sy]`
 /// in the `z = 0` plane; `(nx + 1)(ny + 1)` vertices, normals along `+z`.
@@ -170,6 +171,61 @@ pub fn rotate(positions: &[Point], center: Point, axis: Point, angle: f64) -> Ve
             [q.x, q.y, q.z]
         })
         .collect()
+}
+
+/// A rig that provokes two nearby equilibria (issue 54): a capped neck along `+x` (length 2,
+/// radius 0.15, 16 × 40) with a head at its end (a nose on `+y` makes it asymmetric), and one
+/// target where the head turns by `turn_deg` about the neck's axis and rolls by `roll_deg`
+/// about `z`, both eased in over the neck (`0.6 ≤ x ≤ 1.4`). Near 180° a turn either way fits
+/// the blended lengths about equally.
+pub fn turning_head_rig(turn_deg: f64, roll_deg: f64) -> ShapeSet {
+    let mut m = tube(0.15, 2.0, 16, 40, true);
+    for p in &mut m.positions {
+        if p[0] > 1.5 && p[1] > 0.0 {
+            p[1] *= 1.0 + 0.8 * ((p[0] - 1.5) / 0.5).min(1.0);
+        }
+    }
+    let ease = |x: f64| {
+        let t = ((x - 0.6) / 0.8).clamp(0.0, 1.0);
+        t * t * (3.0 - 2.0 * t)
+    };
+    let target = m
+        .positions
+        .iter()
+        .map(|&p| {
+            let s = ease(p[0]);
+            let c = [0.6, 0.0, 0.0];
+            let q = rotate(&[p], c, [1.0, 0.0, 0.0], (turn_deg * s).to_radians())[0];
+            rotate(&[q], c, [0.0, 0.0, 1.0], (roll_deg * s).to_radians())[0]
+        })
+        .collect();
+    let base = m.positions.clone();
+    ShapeSet::new(m, vec![("rest".into(), base), ("turn".into(), target)])
+        .expect("the generated rig is valid")
+}
+
+/// A rig whose blend can buckle either way (issue 54): a thin sheet (2 × 0.6, 32 × 8 cells)
+/// in the `xy` plane, and one target where it arches into a half circle over `+z`, each
+/// line along `x` keeping its length.
+pub fn buckling_sheet_rig() -> ShapeSet {
+    let (l, theta) = (2.0, std::f64::consts::PI);
+    let m = grid(32, 8, l, 0.6);
+    let r = l / theta;
+    let target = m
+        .positions
+        .iter()
+        .map(|&[x, y, _]| {
+            let phi = (x / l - 0.5) * theta;
+            [
+                l / 2.0 + r * phi.sin(),
+                y,
+                r * phi.cos() - r * (theta / 2.0).cos(),
+            ]
+        })
+        .collect();
+    let base = m.positions.clone();
+    ShapeSet::new(m, vec![("flat".into(), base), ("arch".into(), target)])
+        .expect("the generated rig is valid")
 }
 
 #[cfg(test)]

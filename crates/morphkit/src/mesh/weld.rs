@@ -5,8 +5,22 @@
 //! its side. A solver that takes them as separate vertices solves each piece on its own and the
 //! mesh tears open along every seam. [`Weld::of_shapes`] finds the vertices that coincide in
 //! *every* shape of a rig (within [`WELD_TOLERANCE`] of the base's bounding-box diagonal) and
-//! makes them one; vertices that touch in one shape and part in another (lips closed at rest)
-//! stay apart. [`Weld::shapes`] gives the welded rig to solve on and [`Weld::scatter`] writes a
+//! makes them one where that is what an exporter split: vertices that touch in one shape and
+//! part in another (lips closed at rest) stay apart, and so do separate shells that only touch
+//! (issue 54, below).
+//!
+//! **Seams, not touching shells.** Coincidence alone does not tell a seam from two shells that
+//! touch: a head's eyelashes, eye occlusion and gums are separate shells whose borders lie on
+//! the skin, vertex on vertex (the ICT head: 857 coincident pairs, almost all between shells).
+//! Fusing them makes edges shared by three or more triangles (110 there), couples shells that
+//! the artist kept apart and made the welded blend pop. An exporter's split is undone by
+//! joining *edges*: two copies of a seam edge are each on the border of their side (one
+//! triangle each), and joined they are an ordinary edge of two triangles. So the weld joins
+//! coincident vertices only through edges whose two copies, joined, are used by two triangles
+//! on the edge's two sides (one manifold surface), and joins the copies' endpoints pairwise.
+//! A border lying on another shell's surface (one triangle against two), a shell lying on
+//! another's border (its triangle folded onto the other's) and vertices that coincide without a
+//! common edge stay apart. [`Weld::shapes`] gives the welded rig to solve on and [`Weld::scatter`] writes a
 //! welded result back in the input's own vertex layout and order, so seams never open.
 //!
 //! The welded numbering keeps the input's order of first occurrence: a mesh whose duplicates
@@ -27,6 +41,11 @@ pub struct Weld {
     to_welded: Vec<u32>,
     /// The first input vertex of each welded vertex (`#V_welded`).
     representative: Vec<u32>,
+    /// The input vertices welded with others (ascending) and, per set the weld was made from,
+    /// their own positions (bits of `f64`), so that a frame that is one of the sets gives each
+    /// copy its own numbers ([`Weld::scatter_frame`]). Empty where unknown.
+    grouped: Vec<u32>,
+    grouped_positions: Vec<Vec<[u64; 3]>>,
 }
 
 impl Weld {
@@ -35,6 +54,8 @@ impl Weld {
         Self {
             to_welded: (0..n as u32).collect(),
             representative: (0..n as u32).collect(),
+            grouped: Vec::new(),
+            grouped_positions: Vec::new(),
         }
     }
 
@@ -43,12 +64,12 @@ impl Weld {
     /// transitive: a chain of close vertices is one vertex.
     pub fn of_shapes(shapes: &ShapeSet, tolerance: f64) -> Self {
         let all: Vec<&[Point]> = shapes.all_positions().iter().map(|p| &p[..]).collect();
-        Self::of_positions(&all, tolerance)
+        Self::of_positions(&all, shapes.triangles(), tolerance)
     }
 
     /// Welds the vertices of one mesh that coincide within `tolerance × diagonal`.
     pub fn of_mesh(mesh: &TriMesh, tolerance: f64) -> Self {
-        Self::of_positions(&[&mesh.positions[..]], tolerance)
+        Self::of_positions(&[&mesh.positions[..]], &mesh.triangles, tolerance)
     }
 
     /// The weld of the vertices of `mesh` that coincide in it and in every one of `shapes`
@@ -63,7 +84,7 @@ impl Weld {
         }
         let mut sets: Vec<&[Point]> = vec![&mesh.positions];
         sets.extend(shapes.iter().copied());
-        let w = Self::of_positions(&sets, WELD_TOLERANCE);
+        let w = Self::of_positions(&sets, &mesh.triangles, WELD_TOLERANCE);
         if w.keeps_triangles(&mesh.triangles) {
             w
         } else {
@@ -72,9 +93,36 @@ impl Weld {
     }
 
     /// [`Weld::of_shapes`] on bare position sets of one vertex count (the first is the base
-    /// whose diagonal scales `tolerance`): vertices are welded where they coincide in every set.
-    /// Sets of another vertex count than the first weld nothing.
-    pub fn of_positions(sets: &[&[Point]], tolerance: f64) -> Self {
+    /// whose diagonal scales `tolerance`) and their `triangles`: vertices are welded where they
+    /// coincide in every set and join a seam's edges (module docs). Sets of another vertex
+    /// count than the first weld nothing.
+    pub fn of_positions(sets: &[&[Point]], triangles: &[[u32; 3]], tolerance: f64) -> Self {
+        let coincident = Self::coincident(sets, tolerance);
+        if coincident.is_identity() {
+            return coincident;
+        }
+        let mut w = Self::seams(&coincident, triangles, sets[0]);
+        let mut size = vec![0u32; w.num_welded()];
+        for &g in &w.to_welded {
+            size[g as usize] += 1;
+        }
+        w.grouped = (0..w.num_input() as u32)
+            .filter(|&v| size[w.to_welded[v as usize] as usize] > 1)
+            .collect();
+        w.grouped_positions = sets
+            .iter()
+            .map(|set| {
+                w.grouped
+                    .iter()
+                    .map(|&v| set[v as usize].map(f64::to_bits))
+                    .collect()
+            })
+            .collect();
+        w
+    }
+
+    /// The groups of vertices that coincide in every set (transitively), seams or not.
+    fn coincident(sets: &[&[Point]], tolerance: f64) -> Self {
         let Some(base) = sets.first().copied() else {
             return Self::identity(0);
         };
@@ -104,13 +152,6 @@ impl Weld {
             })
         };
         let mut parent: Vec<u32> = (0..n as u32).collect();
-        fn find(parent: &mut [u32], mut v: u32) -> u32 {
-            while parent[v as usize] != v {
-                parent[v as usize] = parent[parent[v as usize] as usize];
-                v = parent[v as usize];
-            }
-            v
-        }
         for (v, p) in base.iter().enumerate() {
             let c = cell(p);
             // Per axis, the neighbouring cells that may hold a point within tol.
@@ -130,22 +171,78 @@ impl Weld {
                             if (w as usize) <= v || !close(v, w as usize) {
                                 continue;
                             }
-                            let (a, b) = (find(&mut parent, v as u32), find(&mut parent, w));
-                            // The smaller root stays: the group's first vertex represents it.
-                            if a < b {
-                                parent[b as usize] = a;
-                            } else if b < a {
-                                parent[a as usize] = b;
-                            }
+                            union(&mut parent, v as u32, w);
                         }
                     }
                 }
             }
         }
+        Self::from_parents(&mut parent)
+    }
+
+    /// The weld of the coincident groups of `coincident` that join edges into one manifold
+    /// surface: for each edge of `triangles` between two groups, its copies (edges between the
+    /// same two groups) are joined, endpoint with endpoint, where together they are used by
+    /// two triangles that lie on the edge's two sides (not folded one onto the other). Joins are unions, so a vertex split three ways along a seam's end
+    /// still welds. The two ends of an edge that has no length in any shape are joined too
+    /// (its triangle has no area in any shape; the welded rig leaves it out).
+    fn seams(coincident: &Self, triangles: &[[u32; 3]], base: &[Point]) -> Self {
+        let n = coincident.num_input();
+        let group = |v: u32| coincident.to_welded[v as usize];
+        // Per edge between two groups (smaller group first): its input edges, each with the
+        // endpoint in the smaller group first, and how many triangles use it.
+        let mut edges: FastMap<(u32, u32), Vec<(u32, u32, u32)>> = FastMap::default();
+        let mut collapsed = Vec::new();
+        for t in triangles {
+            if t.iter().any(|&v| v as usize >= n) {
+                continue;
+            }
+            for k in 0..3 {
+                let (a, b, o) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+                let (ga, gb) = (group(a), group(b));
+                if ga == gb {
+                    // An edge of no length in any shape: its triangle has no area and goes.
+                    collapsed.push((a, b));
+                    continue;
+                }
+                let (key, e) = if ga < gb {
+                    ((ga, gb), (a, b, o))
+                } else {
+                    ((gb, ga), (b, a, o))
+                };
+                edges.entry(key).or_default().push(e);
+            }
+        }
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        for (a, b) in collapsed {
+            union(&mut parent, a, b);
+        }
+        let mut keys: Vec<&(u32, u32)> = edges.keys().collect();
+        keys.sort_unstable();
+        for key in keys {
+            let uses = &edges[key];
+            // Two triangles over all copies: a seam's two sides (one is a border, more are
+            // a shell's border lying on another surface).
+            if uses.len() != 2 {
+                continue;
+            }
+            let ((a0, b0, o0), (a1, b1, o1)) = (uses[0], uses[1]);
+            if (a0, b0) == (a1, b1) || folded_onto(base, a0, b0, o0, o1) {
+                continue;
+            }
+            union(&mut parent, a0, a1);
+            union(&mut parent, b0, b1);
+        }
+        Self::from_parents(&mut parent)
+    }
+
+    /// The weld of a union-find forest whose roots are their groups' smallest vertex.
+    fn from_parents(parent: &mut [u32]) -> Self {
+        let n = parent.len();
         let mut to_welded = vec![u32::MAX; n];
         let mut representative = Vec::new();
         for v in 0..n {
-            let r = find(&mut parent, v as u32) as usize;
+            let r = find(parent, v as u32) as usize;
             if to_welded[r] == u32::MAX {
                 to_welded[r] = representative.len() as u32;
                 representative.push(r as u32);
@@ -155,6 +252,8 @@ impl Weld {
         Self {
             to_welded,
             representative,
+            grouped: Vec::new(),
+            grouped_positions: Vec::new(),
         }
     }
 
@@ -256,6 +355,33 @@ impl Weld {
         self.to_welded.iter().map(|&w| welded[w as usize]).collect()
     }
 
+    /// [`Weld::scatter`] of a frame with coefficients `c` over the sets the weld was made from
+    /// (for [`Weld::of_shapes`], `c` over the shapes, `Σ c = 1`). Where the frame is one set
+    /// (`c` one-hot at `s`) and a welded vertex is exactly at that set's position of its
+    /// representative, each of its copies takes its own position in `s`: copies within the
+    /// weld tolerance of each other keep their own numbers at the shapes themselves
+    /// (issues 54 and 55: at one-hot weights every input vertex is exactly its target).
+    pub fn scatter_frame(&self, welded: &[Point], c: &[f64]) -> Vec<Point> {
+        let mut out = self.scatter(welded);
+        let one_hot = c.iter().filter(|&&x| x != 0.0).count() == 1;
+        let Some(s) = c.iter().position(|&x| x == 1.0).filter(|_| one_hot) else {
+            return out;
+        };
+        let Some(own) = self.grouped_positions.get(s) else {
+            return out;
+        };
+        let index = |v: u32| self.grouped.binary_search(&v).ok();
+        for (k, &v) in self.grouped.iter().enumerate() {
+            let g = self.to_welded[v as usize] as usize;
+            let r = self.representative[g];
+            let at_rep = index(r).is_some_and(|i| welded[g].map(f64::to_bits) == own[i]);
+            if at_rep {
+                out[v as usize] = own[k].map(f64::from_bits);
+            }
+        }
+        out
+    }
+
     /// The welded rig: the base with welded triangles and every shape gathered, names kept.
     ///
     /// Triangles that use a vertex twice (exporters write them; they have no area) are left
@@ -274,6 +400,41 @@ impl Weld {
             .map(|s| (shapes.name(s).to_string(), self.gather(shapes.positions(s))))
             .collect();
         ShapeSet::new(base, frames)
+    }
+}
+
+/// Whether the triangles `(a, b, o0)` and `(a, b, o1)` lie on the same side of their edge,
+/// one on the other (within 0.01 radians about it): two shells' borders that coincide with
+/// one shell folded onto the other, not a seam's two sides.
+fn folded_onto(p: &[Point], a: u32, b: u32, o0: u32, o1: u32) -> bool {
+    let at = |v: u32| nalgebra::Vector3::from(p[v as usize]);
+    let e = at(b) - at(a);
+    let wing = |o: u32| {
+        let d = at(o) - at(a);
+        d - e * (d.dot(&e) / e.norm_squared().max(f64::MIN_POSITIVE))
+    };
+    let (w0, w1) = (wing(o0), wing(o1));
+    let n = w0.norm() * w1.norm();
+    n > 0.0 && w0.dot(&w1) > n * (1.0 - 5e-5)
+}
+
+/// The root of `v`'s tree, halving the path on the way.
+fn find(parent: &mut [u32], mut v: u32) -> u32 {
+    while parent[v as usize] != v {
+        parent[v as usize] = parent[parent[v as usize] as usize];
+        v = parent[v as usize];
+    }
+    v
+}
+
+/// Joins the trees of `v` and `w`; the smaller root stays, so a group's first vertex
+/// represents it.
+fn union(parent: &mut [u32], v: u32, w: u32) {
+    let (a, b) = (find(parent, v), find(parent, w));
+    if a < b {
+        parent[b as usize] = a;
+    } else if b < a {
+        parent[a as usize] = b;
     }
 }
 
@@ -329,6 +490,113 @@ mod tests {
         assert_eq!(w.input_vertices(&[7]), [7, 42]);
     }
 
+    /// `m` with a second shell appended: copies of the triangles `tris` of `m` on fresh
+    /// vertices at the same places (a shell lying on the first, as eyelashes on skin).
+    fn with_shell_on(m: &TriMesh, tris: std::ops::Range<usize>) -> TriMesh {
+        let mut p = m.positions.clone();
+        let mut t = m.triangles.clone();
+        let mut fresh: FastMap<u32, u32> = FastMap::default();
+        for k in tris {
+            let tri = m.triangles[k].map(|v| {
+                *fresh.entry(v).or_insert_with(|| {
+                    p.push(m.positions[v as usize]);
+                    (p.len() - 1) as u32
+                })
+            });
+            t.push(tri);
+        }
+        TriMesh::new(p, t)
+    }
+
+    /// How many edges of `triangles` three or more triangles use.
+    fn non_manifold_edges(triangles: &[[u32; 3]]) -> usize {
+        let mut uses: FastMap<(u32, u32), usize> = FastMap::default();
+        for t in triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        uses.values().filter(|&&u| u > 2).count()
+    }
+
+    #[test]
+    fn shells_that_only_touch_stay_apart_while_seams_weld() {
+        // A strip of triangles lying on the grid, vertex on vertex and edge on edge: every
+        // one of its vertices coincides with a grid vertex in both shapes, but joining it would
+        // give its border edges three triangles and its inner edges four.
+        let m = generate::grid(6, 5, 1.0, 1.0);
+        let shell = with_shell_on(&m, 0..8);
+        let shapes = |mesh: &TriMesh| {
+            let bent = generate::bend(&mesh.positions, 0.5, 0.5, 1.0);
+            ShapeSet::new(
+                mesh.clone(),
+                vec![("a".into(), mesh.positions.clone()), ("b".into(), bent)],
+            )
+            .unwrap()
+        };
+        let w = Weld::of_shapes(&shapes(&shell), WELD_TOLERANCE);
+        assert!(w.is_identity(), "{} shell vertices welded", w.merged());
+        // The same rig with a seam split elsewhere welds the seam alone.
+        let seam: Vec<u32> = (19..23).collect();
+        let both = with_shell_on(&split(&m, &seam), 0..8);
+        let w = Weld::of_shapes(&shapes(&both), WELD_TOLERANCE);
+        assert_eq!(w.merged(), seam.len());
+        assert_eq!(non_manifold_edges(&w.triangles(&both.triangles)), 0);
+        // Coincidence alone (the old rule) fuses the shell: edges of three and four triangles.
+        let fused = Weld::coincident(&[&both.positions], WELD_TOLERANCE);
+        assert!(non_manifold_edges(&fused.triangles(&both.triangles)) > 0);
+    }
+
+    #[test]
+    fn a_frame_that_is_a_shape_gives_every_copy_its_own_numbers() {
+        // Copies a hair apart (within the tolerance) in both shapes: welded, and at each
+        // shape's one-hot coefficients scattered back to their own positions exactly.
+        let m = generate::grid(6, 5, 1.0, 1.0);
+        let mut s = split(&m, &[9, 10]);
+        let last = s.positions.len() - 1;
+        s.positions[last][0] += 3e-8;
+        let mut bent = generate::bend(&s.positions, 0.5, 0.5, 1.0);
+        bent[last][1] -= 2e-8;
+        let shapes = ShapeSet::new(
+            s.clone(),
+            vec![
+                ("a".into(), s.positions.clone()),
+                ("b".into(), bent.clone()),
+            ],
+        )
+        .unwrap();
+        let w = Weld::of_shapes(&shapes, WELD_TOLERANCE);
+        assert_eq!(w.merged(), 2);
+        let welded = w.shapes(&shapes).unwrap();
+        for (k, own) in [&s.positions, &bent].into_iter().enumerate() {
+            let c = if k == 0 { [1.0, 0.0] } else { [0.0, 1.0] };
+            assert_eq!(&w.scatter_frame(welded.positions(k), &c), own);
+            assert_ne!(&w.scatter(welded.positions(k)), own);
+        }
+        // Between the shapes, copies share their welded vertex's position.
+        let mid = w.scatter_frame(welded.positions(1), &[0.5, 0.5]);
+        assert_eq!(mid, w.scatter(welded.positions(1)));
+    }
+
+    #[test]
+    fn a_seam_split_three_ways_welds_to_one_vertex() {
+        // Every triangle on its own vertices (a flat-shaded export): all copies weld back.
+        let m = generate::grid(4, 3, 1.0, 1.0);
+        let mut p = Vec::new();
+        let mut t = Vec::new();
+        for tri in &m.triangles {
+            t.push(tri.map(|v| {
+                p.push(m.positions[v as usize]);
+                (p.len() - 1) as u32
+            }));
+        }
+        let flat = TriMesh::new(p, t);
+        let w = Weld::of_mesh(&flat, WELD_TOLERANCE);
+        assert_eq!(w.num_welded(), m.num_vertices());
+        assert_eq!(non_manifold_edges(&w.triangles(&flat.triangles)), 0);
+    }
+
     #[test]
     fn triangles_that_use_a_vertex_twice_are_left_out_of_the_solve_only() {
         let mut m = generate::grid(3, 3, 1.0, 1.0);
@@ -363,9 +631,7 @@ mod tests {
             p.push([x, 0.9 + y, 0.9]);
             p.push([x + 2.0 * tol, 0.9 + y, 0.9]);
         }
-        let m = TriMesh::new(p.clone(), vec![[0, 1, 2]]);
-        let shapes = ShapeSet::new(m, vec![("a".into(), p.clone())]).unwrap();
-        let w = Weld::of_shapes(&shapes, WELD_TOLERANCE);
+        let w = Weld::coincident(&[&p], WELD_TOLERANCE);
         for k in 0..200 {
             let v = 2 + 4 * k;
             assert_eq!(w.to_welded()[v], w.to_welded()[v + 1], "pair {k}");
@@ -401,7 +667,9 @@ mod tests {
         assert_eq!(w.representative().len(), m.num_vertices());
         // Sets of other vertex counts weld nothing.
         let other = vec![[0.0; 3]; 2];
-        assert!(Weld::of_positions(&[&s.positions, &other], WELD_TOLERANCE).is_identity());
+        assert!(
+            Weld::of_positions(&[&s.positions, &other], &s.triangles, WELD_TOLERANCE).is_identity()
+        );
         // A triangle with two coincident corners would be lost.
         let mut p = m.positions.clone();
         p[1] = p[0];

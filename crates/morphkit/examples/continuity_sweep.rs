@@ -1,0 +1,113 @@
+//! Sweeps one target of a rig in fine steps and reports the steps that jump (issue 54): every
+//! step's largest vertex move against the linear blend's ([`ContinuityCheck`], bound 4), the
+//! Newton iterations and seconds per frame. The rig is welded as `blend` welds it.
+//!
+//! ```sh
+//! MORPHKIT_DATA=$(cd ../shared/data && pwd) cargo run --release -p morphkit \
+//!     --example continuity_sweep -- RIG TARGET FROM TO STEPS
+//! ```
+//!
+//! RIG: `horse` (ten poses), `ict` (ten expressions), `twist:DEG` (a generated neck whose head
+//! turns DEG° about the neck with a 20° roll), `buckle` (a thin sheet pushed together).
+//! TARGET: a target's index from 0. `PROFILE=1` prints every frame.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use morphkit::io::read_shape_set;
+use morphkit::mesh::generate::{buckling_sheet_rig, turning_head_rig};
+use morphkit::mesh::{bbox_diagonal, Weld, WELD_TOLERANCE};
+use morphkit::springs::{linear_blend, BlendOptions, ContinuityCheck, PhysicalBlend, Weights};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let rig = args.get(1).map(String::as_str).unwrap_or("twist:180");
+    let target: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(0);
+    let from: f64 = args.get(3).and_then(|a| a.parse().ok()).unwrap_or(0.0);
+    let to: f64 = args.get(4).and_then(|a| a.parse().ok()).unwrap_or(1.0);
+    let steps: usize = args.get(5).and_then(|a| a.parse().ok()).unwrap_or(100);
+    let data = |rel: &str| common::data_file(rel).expect("set MORPHKIT_DATA to ../shared/data");
+    let shapes = match rig {
+        "horse" => {
+            let mut p = vec![data("sumner-horse-camel/horse-reference.obj.gz")];
+            p.extend((1..=10).map(|k| data(&format!("sumner-horse-camel/horse-{k:02}.obj.gz"))));
+            read_shape_set(&p).unwrap()
+        }
+        "ict" => read_shape_set(&common::ict_rig_paths().expect("set MORPHKIT_DATA")).unwrap(),
+        "buckle" => buckling_sheet_rig(),
+        r => {
+            let deg: f64 = r.trim_start_matches("twist:").parse().unwrap_or(180.0);
+            turning_head_rig(deg, 20.0)
+        }
+    };
+    let weld = Weld::of_shapes(&shapes, WELD_TOLERANCE);
+    let welded = weld.shapes(&shapes).unwrap();
+    eprintln!(
+        "{rig}: {} vertices ({} welded), {} targets",
+        welded.num_vertices(),
+        weld.merged(),
+        welded.len() - 1
+    );
+    let mut solver = PhysicalBlend::new(&welded, &BlendOptions::default()).unwrap();
+    let n = welded.len() - 1;
+    let weights: Vec<Weights> = (0..=steps)
+        .map(|k| {
+            let mut w = vec![0.0; n];
+            w[target] = from + (to - from) * k as f64 / steps as f64;
+            Weights::Delta(w)
+        })
+        .collect();
+    let bound: f64 = std::env::var("BOUND").ok().and_then(|b| b.parse().ok()).unwrap_or(4.0);
+    let mut check = ContinuityCheck::new(bound, bbox_diagonal(welded.positions(0)));
+    let (mut iters, mut secs) = (Vec::new(), Vec::new());
+    let t0 = std::time::Instant::now();
+    let continuation = std::env::var("CONTINUE").is_ok();
+    let mut prev: Option<(Vec<morphkit::mesh::Point>, Vec<morphkit::mesh::Point>)> = None;
+    for (k, w) in weights.iter().enumerate() {
+        let r = match (&prev, continuation) {
+            // Naive continuation: the previous frame moved as the predictor moves.
+            (Some((x, p)), true) => {
+                let q = solver.predict(w).unwrap();
+                let start: Vec<_> = x
+                    .iter()
+                    .zip(p.iter().zip(&q))
+                    .map(|(x, (p, q))| std::array::from_fn(|i| x[i] + q[i] - p[i]))
+                    .collect();
+                solver.solve_with(w, &[], Some(&start)).unwrap()
+            }
+            _ => solver.solve(w).unwrap(),
+        };
+        if continuation {
+            prev = Some((r.positions.clone(), solver.predict(w).unwrap()));
+        }
+        if std::env::var("PROFILE").is_ok() {
+            println!(
+                "{k:4} {:?}: {} Newton, {:.2} s, converged {}",
+                w, r.stats.newton_iterations, r.stats.seconds, r.stats.converged
+            );
+        }
+        iters.push(r.stats.newton_iterations);
+        secs.push(r.stats.seconds);
+        check
+            .push(&r.positions, &linear_blend(&welded, w).unwrap())
+            .unwrap();
+    }
+    let c = check.finish();
+    for j in &c.jumps {
+        println!("  jump at frames {:?}: {:.2}× linear", j.frames, j.ratio);
+    }
+    iters.sort_unstable();
+    secs.sort_by(f64::total_cmp);
+    let pct = |v: &[usize], p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+    println!(
+        "{rig} target {target} {from}..{to} in {steps}: {} jumps, worst {:.2}×; Newton median {} p99 {} max {}; frame s median {:.3} max {:.3}; {:.1} s",
+        c.jumps.len(),
+        c.worst_ratio,
+        pct(&iters, 0.5),
+        pct(&iters, 0.99),
+        iters.last().unwrap(),
+        secs[secs.len() / 2],
+        secs.last().unwrap(),
+        t0.elapsed().as_secs_f64()
+    );
+}
