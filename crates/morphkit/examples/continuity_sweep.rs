@@ -36,8 +36,10 @@ fn main() {
         "ict" => read_shape_set(&common::ict_rig_paths().expect("set MORPHKIT_DATA")).unwrap(),
         "buckle" => buckling_sheet_rig(),
         r => {
-            let deg: f64 = r.trim_start_matches("twist:").parse().unwrap_or(180.0);
-            turning_head_rig(deg, 20.0)
+            let mut it = r.trim_start_matches("twist:").split(':');
+            let deg: f64 = it.next().and_then(|d| d.parse().ok()).unwrap_or(180.0);
+            let roll: f64 = it.next().and_then(|d| d.parse().ok()).unwrap_or(20.0);
+            turning_head_rig(deg, roll)
         }
     };
     let weld = Weld::of_shapes(&shapes, WELD_TOLERANCE);
@@ -48,7 +50,34 @@ fn main() {
         weld.merged(),
         welded.len() - 1
     );
-    let mut solver = PhysicalBlend::new(&welded, &BlendOptions::default()).unwrap();
+    let mut options = BlendOptions::default();
+    if let Some(t) = std::env::var("TETHER").ok().and_then(|v| v.parse().ok()) {
+        options.tether = t;
+    }
+    if let Some(h) = std::env::var("HINGE").ok().and_then(|v| v.parse().ok()) {
+        options.hinges.weight = h;
+    }
+    if let Some(h) = std::env::var("HOLD_RAMP").ok().and_then(|v| v.parse().ok()) {
+        options.hold_ramp = h;
+    }
+    if std::env::var("NO_SAMPLED").is_ok() {
+        options.sampled_start = false;
+    }
+    let mut solver = PhysicalBlend::new(&welded, &options).unwrap();
+    // STAGES=μ1,μ2,…: a homotopy in the predictor tether, each stage started from the last.
+    let mut stages: Vec<PhysicalBlend> = std::env::var("STAGES")
+        .map(|v| {
+            v.split(',')
+                .map(|m| {
+                    let o = BlendOptions {
+                        tether: m.parse().unwrap(),
+                        ..Default::default()
+                    };
+                    PhysicalBlend::new(&welded, &o).unwrap()
+                })
+                .collect()
+        })
+        .unwrap_or_default();
     let n = welded.len() - 1;
     let weights: Vec<Weights> = (0..=steps)
         .map(|k| {
@@ -57,7 +86,10 @@ fn main() {
             Weights::Delta(w)
         })
         .collect();
-    let bound: f64 = std::env::var("BOUND").ok().and_then(|b| b.parse().ok()).unwrap_or(4.0);
+    let bound: f64 = std::env::var("BOUND")
+        .ok()
+        .and_then(|b| b.parse().ok())
+        .unwrap_or(4.0);
     let mut check = ContinuityCheck::new(bound, bbox_diagonal(welded.positions(0)));
     let (mut iters, mut secs) = (Vec::new(), Vec::new());
     let t0 = std::time::Instant::now();
@@ -74,6 +106,18 @@ fn main() {
                     .map(|(x, (p, q))| std::array::from_fn(|i| x[i] + q[i] - p[i]))
                     .collect();
                 solver.solve_with(w, &[], Some(&start)).unwrap()
+            }
+            _ if !stages.is_empty() => {
+                let mut extra = 0;
+                let mut x = stages[0].solve(w).unwrap();
+                for st in stages.iter_mut().skip(1) {
+                    extra += x.stats.newton_iterations;
+                    x = st.solve_with(w, &[], Some(&x.positions)).unwrap();
+                }
+                extra += x.stats.newton_iterations;
+                let mut r = solver.solve_with(w, &[], Some(&x.positions)).unwrap();
+                r.stats.newton_iterations += extra;
+                r
             }
             _ => solver.solve(w).unwrap(),
         };
