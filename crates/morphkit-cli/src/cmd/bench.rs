@@ -23,14 +23,15 @@ use std::time::Instant;
 /// Arguments of `morphkit bench`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  morphkit bench\n  morphkit bench --data ../shared/data --report bench.json\n  morphkit bench --suite springs --steps 36\n  morphkit bench --suite synth --data ../shared/data\n  morphkit bench --suite scrub --steps 12 --data ../shared/data"
+    after_help = "Examples:\n  morphkit bench\n  morphkit bench --data ../shared/data --report bench.json\n  morphkit bench --suite springs --steps 36\n  morphkit bench --suite synth --data ../shared/data\n  morphkit bench --suite scrub --steps 12 --data ../shared/data\n  morphkit bench --suite continuity --steps 400 --data ../shared/data"
 )]
 pub struct BenchArgs {
     /// Which suite to run: springs, transfer, rig (blendshape rig transfer), memory, synth,
     /// scene (collisions), volume (internal springs: lattice, and tetgen when on the PATH),
     /// scrub (slider changes on the ICT and horse rigs: full solve and preview latency, the
-    /// preview's error; --steps random combinations, at most 24), or all (springs, transfer,
-    /// rig, synth).
+    /// preview's error; --steps random combinations, at most 24), continuity (every target
+    /// swept alone and paths between targets in --steps steps: pops, Newton iterations, frame
+    /// times), or all (springs, transfer, rig, synth).
     #[arg(long, default_value = "all")]
     suite: String,
     /// Directory of the real test meshes (defaults to $MORPHKIT_DATA when set).
@@ -319,10 +320,19 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     if !matches!(
         args.suite.as_str(),
-        "springs" | "transfer" | "rig" | "memory" | "synth" | "scene" | "volume" | "scrub" | "all"
+        "springs"
+            | "transfer"
+            | "rig"
+            | "memory"
+            | "synth"
+            | "scene"
+            | "volume"
+            | "scrub"
+            | "continuity"
+            | "all"
     ) {
         anyhow::bail!(
-            "unknown suite '{}': use springs, transfer, rig, memory, synth, scene, volume, scrub or all",
+            "unknown suite '{}': use springs, transfer, rig, memory, synth, scene, volume, scrub, continuity or all",
             args.suite
         );
     }
@@ -401,6 +411,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 "scrub suite skipped: it needs --data DIR or MORPHKIT_DATA (ict-facekit, sumner-horse-camel)"
             ),
         }
+    }
+    if matches!(args.suite.as_str(), "continuity") {
+        report["continuity"] =
+            super::bench_continuity::run_continuity_bench(data.as_deref(), args.steps)?;
     }
     if let Some(path) = &args.report {
         outputs.json(path, &report)?;

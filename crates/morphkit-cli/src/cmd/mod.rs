@@ -1,6 +1,7 @@
 //! One module per subcommand: its clap arguments and its `run`.
 
 pub mod bench;
+pub mod bench_continuity;
 pub mod bench_machine;
 pub mod bench_rig;
 pub mod bench_scene;
