@@ -9,7 +9,10 @@
 //!
 //! RIG: `horse` (ten poses), `ict` (ten expressions), `twist:DEG` (a generated neck whose head
 //! turns DEG° about the neck with a 20° roll), `buckle` (a thin sheet pushed together).
-//! TARGET: a target's index from 0. `PROFILE=1` prints every frame.
+//! TARGET: a target's index from 0. `PROFILE=1` prints every frame, `BOUND=0` every step's
+//! ratio, `DUMP=DIR` writes every frame's positions; `CONTINUE=1`, `STAGES=μ,…`, `TETHER`,
+//! `HINGE`, `HOLD_RAMP` and `NO_SAMPLED=1` try the variants docs/choices.md measured
+//! ("Continuity in the weights").
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -129,6 +132,25 @@ fn main() {
                 "{k:4} {:?}: {} Newton, {:.2} s, converged {}",
                 w, r.stats.newton_iterations, r.stats.seconds, r.stats.converged
             );
+        }
+        if let Ok(dir) = std::env::var("DUMP") {
+            // Raw little-endian f64 positions (#V × 3) per frame, and the triangles once.
+            let bytes: Vec<u8> = r
+                .positions
+                .iter()
+                .flatten()
+                .flat_map(|c| c.to_le_bytes())
+                .collect();
+            std::fs::write(format!("{dir}/frame-{k:04}.f64"), bytes).unwrap();
+            if k == 0 {
+                let t: Vec<u8> = welded
+                    .triangles()
+                    .iter()
+                    .flatten()
+                    .flat_map(|i| i.to_le_bytes())
+                    .collect();
+                std::fs::write(format!("{dir}/triangles.u32"), t).unwrap();
+            }
         }
         iters.push(r.stats.newton_iterations);
         secs.push(r.stats.seconds);
