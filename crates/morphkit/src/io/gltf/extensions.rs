@@ -100,6 +100,11 @@ fn meshopt_ext(
     MESHOPT.iter().find_map(|n| ext.get(*n))
 }
 
+/// Whether a buffer view is meshopt-compressed (decoded by [`decode_views`]).
+pub(crate) fn is_compressed(view: &::gltf::buffer::View) -> bool {
+    meshopt_ext(view.extensions()).is_some()
+}
+
 /// Per buffer: whether it is a meshopt `fallback` buffer (its data is never read, and it may
 /// have neither a URI nor bytes).
 pub(crate) fn fallback_buffers(doc: &::gltf::Document) -> Vec<bool> {
@@ -165,7 +170,10 @@ pub(crate) fn decode_views(
                 src.len()
             )));
         }
-        let mut dst = vec![0u8; size];
+        let mut dst = Vec::new();
+        dst.try_reserve_exact(size)
+            .map_err(|e| at(format!("cannot allocate {size} decoded bytes: {e}")))?;
+        dst.resize(size, 0u8);
         let code = match mode {
             "ATTRIBUTES" if stride.is_multiple_of(4) => unsafe {
                 // SAFETY: `dst` holds count × stride bytes; the decoder validates `src`.
