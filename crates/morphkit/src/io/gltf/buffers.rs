@@ -6,6 +6,8 @@
 //! with `..` components, and paths that leave the directory through a symbolic link are
 //! refused, and so is anything that is not a regular file (`/dev/zero`, a FIFO). At most the
 //! declared `byteLength` is read, so a buffer never costs more memory than the document says.
+//! External files are read as they are: never decompressed, even when they start with the
+//! gzip magic.
 
 use crate::io::IoError;
 use std::io::Read;

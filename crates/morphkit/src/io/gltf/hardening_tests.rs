@@ -1,7 +1,7 @@
 //! Issue 55 (hardening, third probe): small files that make the reader decode gigabytes by
-//! reusing an accessor or a view.
+//! reusing an accessor or a view, and external images that are gzip data.
 
-use super::parse_gltf_morphs;
+use super::{parse_gltf_morphs, GltfAsset, GltfAssetOptions, GltfReadOptions};
 use serde_json::{json, Value};
 use std::path::Path;
 
@@ -141,4 +141,48 @@ fn compressed_views_decoding_one_stream_are_refused() {
         "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}]});
     let e = over_budget("meshopt.glb", glb(&doc, Some(&enc)));
     assert!(e.contains("120 of them compressed views"), "{e}");
+}
+
+#[test]
+fn a_gzipped_external_image_is_embedded_as_it_is() {
+    use std::io::Write;
+    let d = std::env::temp_dir().join(format!("morphkit-h55-image-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(&[7u8; 100_000]).unwrap();
+    let image = gz.finish().unwrap();
+    assert_eq!(image[..2], [0x1f, 0x8b]);
+    std::fs::write(d.join("image.png"), &image).unwrap();
+    let tri: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    std::fs::write(d.join("tri.bin"), &tri).unwrap();
+    let doc = json!({"asset": {"version": "2.0"},
+        "buffers": [{"byteLength": 36, "uri": "tri.bin"}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": F32, "count": 3, "type": "VEC3",
+            "min": [0, 0, 0], "max": [1, 1, 0]}],
+        "images": [{"uri": "image.png"}],
+        "textures": [{"source": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}]});
+    let src = d.join("a.gltf");
+    std::fs::write(&src, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let out = d.join("a.glb");
+    GltfAsset::read(&src, &GltfReadOptions::default())
+        .unwrap()
+        .write(&out, &GltfAssetOptions::default())
+        .unwrap();
+    let bytes = std::fs::read(&out).unwrap();
+    let jlen = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let written: Value = serde_json::from_slice(&bytes[20..20 + jlen]).unwrap();
+    let bin = &bytes[20 + jlen + 8..];
+    let img = &written["images"][0];
+    assert_eq!(img["mimeType"], "image/png");
+    let view = &written["bufferViews"][img["bufferView"].as_u64().unwrap() as usize];
+    let o = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let n = view["byteLength"].as_u64().unwrap() as usize;
+    assert_eq!(&bin[o..o + n], &image[..]);
+    let _ = std::fs::remove_dir_all(&d);
 }
