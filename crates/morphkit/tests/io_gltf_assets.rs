@@ -318,8 +318,8 @@ fn exporter_variants_read_back() {
 
 /// The fuzz seeds (`fuzz/seeds/gltf`: exporter variants and a hand-built quantized,
 /// non-indexed, sparse, CUBICSPLINE file) read without node, and evaluate as the fuzz target
-/// does; those named `refused-*` (issue 55: a file amplifying memory) are refused with an
-/// error naming the file.
+/// does; those named `refused-*` (issue 55: a file amplifying memory, a view past its buffer)
+/// are refused with an error naming the file.
 #[test]
 fn fuzz_seeds_read() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds/gltf");

@@ -145,9 +145,13 @@ pub(crate) fn decode_views(
         let count = field("count").ok_or_else(|| at("no count".into()))?;
         let mode = e.get("mode").and_then(|m| m.as_str()).unwrap_or("");
         let filter = e.get("filter").and_then(|m| m.as_str()).unwrap_or("NONE");
+        // Within the source buffer's declared byteLength (its data may hold more: a GLB's BIN
+        // chunk padding, or bytes a writer would drop).
+        let declared = doc.buffers().nth(buffer).map(|b| b.length());
         let src = buffers
             .get(buffer)
-            .and_then(|b| b.get(offset..offset.checked_add(length)?))
+            .zip(declared)
+            .and_then(|(b, n)| b.get(offset..offset.checked_add(length).filter(|&e| e <= n)?))
             .ok_or_else(|| {
                 at(format!(
                     "bytes {offset}..+{length} of buffer {buffer} are not in the file"

@@ -1,5 +1,6 @@
 //! Issue 55 (hardening, third probe): small files that make the reader decode gigabytes by
-//! reusing an accessor or a view, and external images that are gzip data.
+//! reusing an accessor or a view, external images that are gzip data, and buffer views that
+//! reach past their buffer's `byteLength`.
 
 use super::{parse_gltf_morphs, GltfAsset, GltfAssetOptions, GltfReadOptions};
 use serde_json::{json, Value};
@@ -141,6 +142,55 @@ fn compressed_views_decoding_one_stream_are_refused() {
         "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}]});
     let e = over_budget("meshopt.glb", glb(&doc, Some(&enc)));
     assert!(e.contains("120 of them compressed views"), "{e}");
+}
+
+/// A GLB whose buffer 0 declares 800 bytes over a BIN chunk of 1068, with views `views`.
+fn short_buffer(views: Value, position_view: usize) -> Vec<u8> {
+    let doc = json!({"asset": {"version": "2.0"},
+        "buffers": [{"byteLength": 800}], "bufferViews": views,
+        "accessors": [positions(3, Some(position_view))],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}]});
+    glb(&doc, Some(&[0u8; 1068]))
+}
+
+#[test]
+fn views_past_their_buffer_are_refused() {
+    // Used: POSITION on bytes 1000..1036, inside the BIN chunk but past byteLength 800.
+    let e = refused(
+        "used.glb",
+        short_buffer(
+            json!([{"buffer": 0, "byteOffset": 1000, "byteLength": 36}]),
+            0,
+        ),
+    );
+    assert!(
+        e.contains(
+            "buffer view 0: byteOffset 1000 + byteLength 36 reaches past the 800 bytes of buffer 0"
+        ),
+        "{e}"
+    );
+    // Unused, also refused: a writer keeps only byteLength bytes.
+    let views = json!([{"buffer": 0, "byteLength": 36},
+        {"buffer": 0, "byteOffset": 800, "byteLength": 268}]);
+    let e = refused("unused.glb", short_buffer(views, 0));
+    assert!(
+        e.contains("buffer view 1: byteOffset 800 + byteLength 268"),
+        "{e}"
+    );
+    // An offset that would wrap around.
+    let views = json!([{"buffer": 0, "byteLength": 36},
+        {"buffer": 0, "byteOffset": u64::MAX - 3, "byteLength": 8}]);
+    let e = refused("wrap.glb", short_buffer(views, 0));
+    assert!(
+        e.contains("buffer view 1: byteOffset 18446744073709551612"),
+        "{e}"
+    );
+    // Within byteLength: read.
+    let ok = short_buffer(
+        json!([{"buffer": 0, "byteOffset": 764, "byteLength": 36}]),
+        0,
+    );
+    assert!(parse_gltf_morphs(Path::new("ok.glb"), ok).is_ok());
 }
 
 #[test]

@@ -221,6 +221,7 @@ pub(super) fn load_with<T>(
             ),
         ));
     }
+    super::buffers::check_views(path, doc)?;
     // What will be read, and what it costs, before anything is decoded.
     let mesh = choose_mesh(path, doc, opts)?;
     super::budget::check(path, doc, &mesh)?;
