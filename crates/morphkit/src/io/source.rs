@@ -45,6 +45,25 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, IoError> {
     Ok(bytes)
 }
 
+/// The bytes of `path` exactly as they are, never decompressed: for what is embedded or
+/// copied rather than parsed (a glTF's external images), where a file that starts with the
+/// gzip magic is still only bytes. Errors as [`read_file`]'s: a directory, an unreadable or an
+/// empty file.
+pub(crate) fn read_raw(path: &Path) -> Result<Vec<u8>, IoError> {
+    if path.is_dir() {
+        return Err(IoError::IsDirectory {
+            path: path.to_path_buf(),
+        });
+    }
+    let bytes = std::fs::read(path).map_err(|e| IoError::os(path, "read the file", e))?;
+    if bytes.is_empty() {
+        return Err(IoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(bytes)
+}
+
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
 /// The first bytes of `b` in hex, for messages.
@@ -55,8 +74,18 @@ fn hex_prefix(b: &[u8]) -> String {
 
 /// Decompresses every gzip member of `raw` (which starts with the gzip magic).
 pub(crate) fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>, IoError> {
-    let mut out = Vec::with_capacity(raw.len().saturating_mul(4));
+    let mut out = Vec::new();
     gunzip_stream(path, raw, |chunk| {
+        // A stream that inflates past what memory holds is an error, not an abort.
+        out.try_reserve(chunk.len()).map_err(|e| {
+            IoError::content(
+                path,
+                format!(
+                    "the gzip data inflates to more than {} bytes, which cannot be held: {e}",
+                    out.len()
+                ),
+            )
+        })?;
         out.extend_from_slice(chunk);
         Ok(())
     })?;

@@ -36,10 +36,6 @@ impl Data<'_> {
     }
 }
 
-/// The most components an accessor without a buffer view may have (it costs memory without
-/// costing file size): 2²⁶, 512 MiB of `f64`.
-const MAX_ZERO_ELEMENTS: usize = 1 << 26;
-
 /// Number of components of an element.
 pub(crate) fn components(d: Dimensions) -> usize {
     d.multiplicity()
@@ -81,6 +77,16 @@ fn component(b: &[u8], t: DataType, normalized: bool) -> f64 {
     }
 }
 
+/// Room for `n` more values in `out`, or a message (never an abort).
+pub(crate) fn reserve<T>(out: &mut Vec<T>, n: usize) -> Result<(), String> {
+    out.try_reserve_exact(n).map_err(|e| {
+        format!(
+            "cannot allocate {n} values of {} bytes: {e}",
+            std::mem::size_of::<T>()
+        )
+    })
+}
+
 /// Reads `count` elements of `comps` components of type `t` from `bytes` at `offset`, each
 /// `stride` bytes apart (tightly packed when `None`).
 #[allow(clippy::too_many_arguments)]
@@ -114,7 +120,7 @@ fn read_dense(
                 bytes.len()
             )
         })?;
-    out.reserve(count * comps);
+    reserve(out, count * comps)?;
     for i in 0..count {
         let e = &bytes[offset + i * stride..];
         for c in 0..comps {
@@ -157,16 +163,13 @@ pub(crate) fn read(acc: &Accessor, data: &Data) -> Result<Vec<f64>, String> {
         }
         None => {
             // No buffer view: all zeros (§5.1.1), with sparse values if any. The count is the
-            // document's word, so bound it before allocating.
+            // document's word: the file's decoding budget (`budget.rs`) bounded it, and an
+            // allocation that still fails is an error.
             let n = count
                 .checked_mul(comps)
-                .filter(|&n| n <= MAX_ZERO_ELEMENTS)
-                .ok_or_else(|| {
-                    at(format!(
-                        "{count} elements without a buffer view; at most {MAX_ZERO_ELEMENTS} components are read"
-                    ))
-                })?;
-            out = vec![0.0; n];
+                .ok_or_else(|| at(format!("{count} elements without a buffer view")))?;
+            reserve(&mut out, n).map_err(at)?;
+            out.resize(n, 0.0);
         }
     }
     if let Some(sp) = acc.sparse() {
@@ -215,5 +218,8 @@ pub(crate) fn read_vec3(acc: &Accessor, data: &Data) -> Result<Vec<[f64; 3]>, St
         ));
     }
     let v = read(acc, data)?;
-    Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    let mut out = Vec::new();
+    reserve(&mut out, v.len() / 3).map_err(|m| format!("accessor {}: {m}", acc.index()))?;
+    out.extend(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]));
+    Ok(out)
 }

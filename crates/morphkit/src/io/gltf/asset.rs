@@ -18,7 +18,8 @@ use super::accessor;
 use super::anim::{channel_data, keys_of, weight_channels, WeightChannel};
 use super::read::{load_with, Loaded, Scan};
 use super::{GltfMorphs, GltfReadOptions, SAFE_MORPH_TARGETS};
-use crate::io::{source::read_file, IoError};
+use crate::io::source::{read_file, read_raw};
+use crate::io::IoError;
 use crate::mesh::Point;
 use ::gltf::Semantic;
 use serde_json::Value;
@@ -227,7 +228,9 @@ fn load_images(path: &Path, doc: &Value) -> Result<Vec<Option<ImageData>>, IoErr
                 file.display()
             )));
         }
-        let bytes = read_file(&file)?;
+        // Embedded exactly as they are: an image is never decompressed (read_file would
+        // gunzip a file that starts with 1f 8b).
+        let bytes = read_raw(&file)?;
         let mime = img
             .get("mimeType")
             .and_then(Value::as_str)

@@ -5,7 +5,10 @@
 //! a relative URI reference). Absolute paths, URIs with a scheme (`file:`, `http:`), paths
 //! with `..` components, and paths that leave the directory through a symbolic link are
 //! refused, and so is anything that is not a regular file (`/dev/zero`, a FIFO). At most the
-//! declared `byteLength` is read, so a buffer never costs more memory than the document says.
+//! declared `byteLength` is read, so a buffer never costs more memory than the document says,
+//! and a buffer holds exactly its `byteLength` bytes (a longer BIN chunk or data URI is cut),
+//! within which every buffer view must lie ([`check_views`]). External files are read as
+//! they are: never decompressed, even when they start with the gzip magic.
 
 use crate::io::IoError;
 use std::io::Read;
@@ -51,9 +54,34 @@ pub(crate) fn load_buffers(
                 data.len()
             )));
         }
+        // Bytes past byteLength (a GLB BIN chunk's padding, or more) are not the buffer's: the
+        // writer does not keep them, so the reader does not read them either.
+        let mut data = data;
+        data.truncate(len);
         out.push(data);
     }
     Ok(out)
+}
+
+/// Fails when a buffer view, used or not, reaches past its buffer's `byteLength` (glTF 2.0
+/// §3.6.1: a view lies within its buffer); the sum is checked, so no offset wraps around.
+pub(crate) fn check_views(path: &Path, doc: &::gltf::Document) -> Result<(), IoError> {
+    for view in doc.views() {
+        let (o, n, b) = (view.offset(), view.length(), view.buffer());
+        if o.checked_add(n).is_none_or(|end| end > b.length()) {
+            return Err(IoError::content(
+                path,
+                format!(
+                    "buffer view {}: byteOffset {o} + byteLength {n} reaches past the {} bytes \
+                     of buffer {} (its byteLength)",
+                    view.index(),
+                    b.length(),
+                    b.index()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The directory the glTF file's relative URIs refer to.

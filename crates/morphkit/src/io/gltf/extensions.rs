@@ -100,6 +100,11 @@ fn meshopt_ext(
     MESHOPT.iter().find_map(|n| ext.get(*n))
 }
 
+/// Whether a buffer view is meshopt-compressed (decoded by [`decode_views`]).
+pub(crate) fn is_compressed(view: &::gltf::buffer::View) -> bool {
+    meshopt_ext(view.extensions()).is_some()
+}
+
 /// Per buffer: whether it is a meshopt `fallback` buffer (its data is never read, and it may
 /// have neither a URI nor bytes).
 pub(crate) fn fallback_buffers(doc: &::gltf::Document) -> Vec<bool> {
@@ -140,9 +145,13 @@ pub(crate) fn decode_views(
         let count = field("count").ok_or_else(|| at("no count".into()))?;
         let mode = e.get("mode").and_then(|m| m.as_str()).unwrap_or("");
         let filter = e.get("filter").and_then(|m| m.as_str()).unwrap_or("NONE");
+        // Within the source buffer's declared byteLength (its data may hold more: a GLB's BIN
+        // chunk padding, or bytes a writer would drop).
+        let declared = doc.buffers().nth(buffer).map(|b| b.length());
         let src = buffers
             .get(buffer)
-            .and_then(|b| b.get(offset..offset.checked_add(length)?))
+            .zip(declared)
+            .and_then(|(b, n)| b.get(offset..offset.checked_add(length).filter(|&e| e <= n)?))
             .ok_or_else(|| {
                 at(format!(
                     "bytes {offset}..+{length} of buffer {buffer} are not in the file"
@@ -165,7 +174,10 @@ pub(crate) fn decode_views(
                 src.len()
             )));
         }
-        let mut dst = vec![0u8; size];
+        let mut dst = Vec::new();
+        dst.try_reserve_exact(size)
+            .map_err(|e| at(format!("cannot allocate {size} decoded bytes: {e}")))?;
+        dst.resize(size, 0u8);
         let code = match mode {
             "ATTRIBUTES" if stride.is_multiple_of(4) => unsafe {
                 // SAFETY: `dst` holds count × stride bytes; the decoder validates `src`.

@@ -83,6 +83,7 @@ mod anim;
 mod asset;
 mod asset_edit;
 mod asset_write;
+mod budget;
 mod buffers;
 mod extensions;
 mod normals;
@@ -186,5 +187,7 @@ impl GltfMorphs {
 
 #[cfg(test)]
 mod asset_tests;
+#[cfg(test)]
+mod hardening_tests;
 #[cfg(test)]
 mod read_tests;

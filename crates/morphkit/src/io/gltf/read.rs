@@ -221,6 +221,10 @@ pub(super) fn load_with<T>(
             ),
         ));
     }
+    super::buffers::check_views(path, doc)?;
+    // What will be read, and what it costs, before anything is decoded.
+    let mesh = choose_mesh(path, doc, opts)?;
+    super::budget::check(path, doc, &mesh)?;
     let fallback = extensions::fallback_buffers(doc);
     let buffers = load_buffers(path, doc, blob, &fallback)?;
     let views = extensions::decode_views(path, doc, &buffers)?;
@@ -228,7 +232,6 @@ pub(super) fn load_with<T>(
         buffers: &buffers,
         views: &views,
     };
-    let mesh = choose_mesh(path, doc, opts)?;
     let (mut base, displacements, primitives) = read_mesh(path, &mesh, &data)?;
     // A quantized morphkit rig: positions back in their units (the node's transform), unless
     // the caller edits the file in the mesh's own space (GltfAsset).
@@ -461,6 +464,8 @@ fn read_mesh(
             displacements = vec![Vec::new(); targets.len()];
         }
         for (t, target) in targets.iter().enumerate() {
+            accessor::reserve(&mut displacements[t], n)
+                .map_err(|m| at(format!("morph target {t}: {m}")))?;
             let Some(acc) = target.positions() else {
                 displacements[t].extend(std::iter::repeat_n([0.0; 3], n));
                 continue;
@@ -482,6 +487,7 @@ fn read_mesh(
             }
             displacements[t].extend(d);
         }
+        accessor::reserve(&mut positions, n).map_err(at)?;
         positions.extend(p);
         counts.push((n, idx.len() / 3));
     }
