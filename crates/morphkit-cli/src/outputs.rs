@@ -72,8 +72,13 @@ struct Context {
 static CONTEXT: OnceLock<Context> = OnceLock::new();
 
 /// Records the output flags, the subcommand name and the command line (call once, from main).
+/// Arguments that are not UTF-8 (a file name in another encoding) are recorded lossily, with
+/// U+FFFD for what is not UTF-8: the record is for people, the files are opened by their bytes.
 pub fn set_context(flags: OutputFlags, subcommand: &str) {
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let command = std::env::args_os()
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect::<Vec<_>>()
+        .join(" ");
     let _ = CONTEXT.set(Context {
         flags,
         subcommand: subcommand.to_string(),
