@@ -3,6 +3,30 @@
 
 mod common;
 use common::*;
+use std::path::{Path, PathBuf};
+
+/// A directory with the demo's files: base.obj and target.obj (a bar straight and bent).
+fn demo(name: &str) -> PathBuf {
+    let d = tmp_dir(name);
+    ok(&["demo", "--out", s(&d)]);
+    d
+}
+
+fn blend_demo<'a>(d: &'a Path, rest: &[&'a str]) -> Vec<String> {
+    let mut v = vec![
+        "blend".to_string(),
+        "--base".into(),
+        d.join("base.obj").display().to_string(),
+        "--target".into(),
+        d.join("target.obj").display().to_string(),
+    ];
+    v.extend(rest.iter().map(|x| x.to_string()));
+    v
+}
+
+fn strs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
 
 /// A command line with an argument that is not UTF-8 (a file name in Latin-1) ends in a clean
 /// error, not a panic where the command line is recorded.
@@ -23,4 +47,49 @@ fn a_non_utf8_argument_is_a_clean_error() {
     assert!(!err.contains("panicked"), "{err}");
     assert!(err.starts_with("error: "), "{err}");
     assert!(err.contains("caf\u{fffd}.obj"), "{err}");
+}
+
+/// Negative numbers are values of the options that take numbers, checked like any other value.
+#[test]
+fn negative_numbers_are_values() {
+    let d = demo("probe55-negative");
+    let out = d.join("minus.obj");
+    ok(&strs(&blend_demo(
+        &d,
+        &["--alpha", "-0.5", "--linear", "--out", s(&out)],
+    )));
+    assert!(out.exists());
+    let e = fails(&strs(&blend_demo(
+        &d,
+        &["--alpha", "-500", "--out", s(&out)],
+    )));
+    assert!(
+        e.contains("--alpha: weight 0 is -500, expected at most 100"),
+        "{e}"
+    );
+    let e = fails(&strs(&blend_demo(
+        &d,
+        &[
+            "--frames",
+            "3",
+            "--fps",
+            "-24",
+            "--out",
+            s(&d.join("a.glb")),
+        ],
+    )));
+    assert!(e.contains("--fps -24: must be at least 0.001"), "{e}");
+    let e = fails(&strs(&blend_demo(
+        &d,
+        &["--alpha", "0.5", "--k0", "-1", "--out", s(&out)],
+    )));
+    assert!(e.contains("--k0 -1: must be greater than 0"), "{e}");
+    // A count is no negative number: clap says so, naming the flag.
+    let out = morphkit(&strs(&blend_demo(
+        &d,
+        &["--frames", "-3", "--out", s(&d.join("b.glb"))],
+    )));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("invalid value '-3' for '--frames"), "{err}");
 }
