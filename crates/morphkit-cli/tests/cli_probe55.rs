@@ -93,3 +93,26 @@ fn negative_numbers_are_values() {
     assert!(!out.status.success());
     assert!(err.contains("invalid value '-3' for '--frames"), "{err}");
 }
+
+/// An output name of 250 bytes (the file system allows 255) is written: its temporaries
+/// stand under a short name, and none is left behind.
+#[test]
+fn an_output_name_of_250_bytes_is_written() {
+    let d = demo("probe55-long");
+    let long = |ext: &str| d.join(format!("{}.{ext}", "x".repeat(249 - ext.len())));
+    let (obj, glb, report) = (long("obj"), long("glb"), long("json"));
+    assert_eq!(obj.file_name().unwrap().len(), 250);
+    let args = ["--alpha", "0.5", "--out", s(&obj), "--report", s(&report)];
+    ok(&strs(&blend_demo(&d, &args)));
+    ok(&strs(&blend_demo(&d, &["--frames", "3", "--out", s(&glb)])));
+    let frames = d.join("f".repeat(250));
+    ok(&["convert", s(&glb), s(&frames)]);
+    assert!(obj.is_file() && glb.is_file() && report.is_file());
+    assert!(frames.join("frame_0002.obj").is_file());
+    let left: Vec<String> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}
