@@ -116,3 +116,41 @@ fn an_output_name_of_250_bytes_is_written() {
         .collect();
     assert!(left.is_empty(), "{left:?}");
 }
+
+/// Flags that act only with another one are refused without it, instead of being ignored.
+#[test]
+fn flags_that_would_do_nothing_are_refused() {
+    let d = demo("probe55-idle");
+    let out = d.join("x.obj");
+    for (flag, value, needed) in [
+        ("--mesh", "Face", "--rig"),
+        ("--animation", "Talk", "--rig"),
+        ("--refine", "2", "--interactive"),
+        ("--interactive-cache", "c.json", "--interactive"),
+    ] {
+        let args = ["--alpha", "0.5", "--linear", flag, value, "--out", s(&out)];
+        let e = fails(&strs(&blend_demo(&d, &args)));
+        assert!(
+            e.contains(&format!("{flag} is used only with {needed}")),
+            "{flag}: {e}"
+        );
+        assert!(!out.exists());
+    }
+    // An edit of a user's asset keeps its accessors: the encoding flags would be ignored.
+    let glb = d.join("anim.glb");
+    ok(&strs(&blend_demo(&d, &["--frames", "3", "--out", s(&glb)])));
+    let copy = d.join("copy.glb");
+    for flag in ["--quantize", "--sparse-targets", "--no-normals"] {
+        let e = fails(&["convert", s(&glb), s(&copy), flag]);
+        assert!(
+            e.contains(&format!(
+                "{flag} not applied to an edit of the user's asset"
+            )),
+            "{e}"
+        );
+    }
+    let e = fails(&["blend", "--rig", s(&glb), "--quantize", "--out", s(&copy)]);
+    assert!(e.contains("--quantize not applied"), "{e}");
+    assert!(!copy.exists());
+    ok(&["convert", s(&glb), s(&copy)]);
+}
