@@ -5,7 +5,7 @@ mod outputs;
 mod util;
 mod weights;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Physically plausible blendshapes and example-driven animation transfer for triangle meshes.
 #[derive(Parser, Debug)]
@@ -65,10 +65,30 @@ fn remove_temporaries_on_signals() {
     });
 }
 
+/// The command-line parser, where every option that takes a value accepts a negative number
+/// as its value (`--alpha -0.5`, `--fps -1`): clap would otherwise take `-0.5` for a flag and
+/// say "unexpected argument '-0' found". The value is then checked like any other (`--alpha
+/// -0.5` extrapolates; `--fps -1` is refused naming the flag and the accepted range).
+fn command() -> clap::Command {
+    fn negatives(cmd: clap::Command) -> clap::Command {
+        cmd.mut_args(|a| {
+            if a.get_action().takes_values() {
+                a.allow_negative_numbers(true)
+            } else {
+                a
+            }
+        })
+        .mut_subcommands(negatives)
+    }
+    negatives(Cli::command())
+}
+
 fn main() {
     #[cfg(unix)]
     remove_temporaries_on_signals();
-    let cli = Cli::parse();
+    let mut parser = command();
+    let matches = parser.clone().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.format(&mut parser).exit());
     let name = match &cli.command {
         Command::Info(_) => "info",
         Command::Convert(_) => "convert",

@@ -72,8 +72,13 @@ struct Context {
 static CONTEXT: OnceLock<Context> = OnceLock::new();
 
 /// Records the output flags, the subcommand name and the command line (call once, from main).
+/// Arguments that are not UTF-8 (a file name in another encoding) are recorded lossily, with
+/// U+FFFD for what is not UTF-8: the record is for people, the files are opened by their bytes.
 pub fn set_context(flags: OutputFlags, subcommand: &str) {
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let command = std::env::args_os()
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect::<Vec<_>>()
+        .join(" ");
     let _ = CONTEXT.set(Context {
         flags,
         subcommand: subcommand.to_string(),
@@ -92,6 +97,33 @@ pub fn asset_max_targets() -> usize {
         .flags
         .max_targets
         .unwrap_or(io::SAFE_MORPH_TARGETS)
+}
+
+/// Refuses the output flags that an edit of a user's asset written to `out` does not apply:
+/// the edit keeps the asset's own accessors as they are and stores its new targets as `f32`
+/// (with normal deltas where the asset has normals; [`io::GltfAsset`]), so `--quantize`,
+/// `--sparse-targets` and `--no-normals` would be ignored.
+pub fn check_asset_flags(out: &Path) -> anyhow::Result<()> {
+    let f = context().flags;
+    let given: Vec<&str> = [
+        (f.quantize, "--quantize"),
+        (f.sparse_targets, "--sparse-targets"),
+        (f.no_normals, "--no-normals"),
+    ]
+    .iter()
+    .filter(|(on, _)| *on)
+    .map(|(_, name)| *name)
+    .collect();
+    if !given.is_empty() {
+        anyhow::bail!(
+            "{}: {} not applied to an edit of the user's asset, which keeps its own accessors and \
+             encoding as they are (they apply to animations written whole); leave {} out",
+            out.display(),
+            given.join(", "),
+            if given.len() == 1 { "it" } else { "them" }
+        );
+    }
+    Ok(())
 }
 
 /// The stem of a path without mesh extensions (`horse-07.obj.gz` → `horse-07`).
@@ -302,6 +334,7 @@ impl Outputs {
         inputs: &[PathBuf],
         frames: usize,
     ) -> anyhow::Result<()> {
+        check_asset_flags(path)?;
         let opts = frames_options(
             &FramesOptions {
                 inputs: inputs.to_vec(),

@@ -146,6 +146,25 @@ pub fn check_range(
     Ok(value)
 }
 
+/// Refuses `flag`, when `given`, without the flag `needed` (`present`), saying `what` it does.
+/// clap's `requires` does not hold where `needed` conflicts with another argument given (it
+/// then counts `needed` as not required: `blend --base … --mesh X`, where --rig conflicts with
+/// --base), so such a flag would otherwise be ignored with exit status 0.
+pub fn only_with(
+    flag: &str,
+    given: bool,
+    needed: &str,
+    present: bool,
+    what: &str,
+) -> anyhow::Result<()> {
+    if given && !present {
+        anyhow::bail!(
+            "{flag} is used only with {needed} ({what}); give {needed} or leave {flag} out"
+        );
+    }
+    Ok(())
+}
+
 /// Refuses a colour output `path` of `flag` that is not a `.ply` file (colours are written
 /// only as PLY); `what` names the colours in the message.
 pub fn require_ply(flag: &str, path: &std::path::Path, what: &str) -> anyhow::Result<()> {

@@ -294,6 +294,7 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     if !matches!(a.fixed.as_str(), "auto" | "none") {
         protected.push(PathBuf::from(&a.fixed));
     }
+    super::blend_inputs::check_dependent_flags(a)?;
     check_positive("--k0", a.k0)?;
     check_positive("--tolerance", a.tolerance)?;
     check_fps(a.fps)?;

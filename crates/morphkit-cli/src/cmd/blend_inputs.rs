@@ -138,3 +138,37 @@ pub(super) fn check_frames_memory(
     }
     Ok(())
 }
+
+/// Refuses the flags that act only with another one given without it (see
+/// [`crate::util::only_with`]): `--mesh` and `--animation` without `--rig`, `--refine` and
+/// `--interactive-cache` without `--interactive`.
+pub(super) fn check_dependent_flags(a: &BlendArgs) -> anyhow::Result<()> {
+    use crate::util::only_with;
+    let rig = a.rig.is_some();
+    only_with(
+        "--mesh",
+        a.mesh.is_some(),
+        "--rig",
+        rig,
+        "it names the mesh of the asset",
+    )?;
+    let what = "it names the asset's weights animation";
+    only_with("--animation", a.animation.is_some(), "--rig", rig, what)?;
+    let what = "projected-Newton steps after each reduced solve";
+    only_with(
+        "--refine",
+        a.refine > 0,
+        "--interactive",
+        a.interactive,
+        what,
+    )?;
+    let what = "it keeps the interactive preparation";
+    let cache = a.interactive_cache.is_some();
+    only_with(
+        "--interactive-cache",
+        cache,
+        "--interactive",
+        a.interactive,
+        what,
+    )
+}

@@ -107,6 +107,7 @@ pub(super) fn read(a: &BlendArgs, path: &Path) -> anyhow::Result<(Rig, ShapeSet)
         }
     };
     if carries(&a.out) {
+        crate::outputs::check_asset_flags(&a.out)?;
         asset.set_max_targets(crate::outputs::asset_max_targets());
         asset.check_room(weights.len())?;
     }

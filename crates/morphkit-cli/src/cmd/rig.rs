@@ -143,6 +143,7 @@ fn read_target(args: &RigArgs, shapes: &ShapeSet) -> anyhow::Result<(TriMesh, Op
     if !gltf(&args.out) {
         return Ok((io::read_mesh_with(&args.target, &opts)?.0, None));
     }
+    crate::outputs::check_asset_flags(&args.out)?;
     let mut asset = GltfAsset::read(&args.target, &opts)?;
     let mesh = asset.morphs().base.clone();
     morphkit::mesh::validate(&mesh)

@@ -4,6 +4,7 @@
 //! (`fsync`) and renamed over the destination, so readers see either the old or the complete
 //! new file, and a failed write leaves nothing behind.
 
+use super::temporaries::{name_in_temporary, SIBLING_NAME_BUDGET};
 use super::IoError;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -29,19 +30,16 @@ pub(crate) fn write_atomic_with(
             path: path.to_path_buf(),
         });
     }
-    let name = path.file_name().ok_or_else(|| IoError::IsDirectory {
-        path: path.to_path_buf(),
-    })?;
+    if path.file_name().is_none() {
+        return Err(IoError::IsDirectory {
+            path: path.to_path_buf(),
+        });
+    }
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let tmp = dir.join(format!(
-        ".{}.{}-{}.tmp",
-        name.to_string_lossy(),
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
+    let tmp = temp_sibling(path, "tmp");
     super::temporaries::record(&tmp, false);
     let file = match std::fs::OpenOptions::new()
         .write(true)
@@ -81,7 +79,8 @@ pub(crate) fn write_atomic_with(
 }
 
 /// A fresh, unused path next to `path` (same directory, so a rename into place stays on one
-/// file system): `.NAME.PID-N.SUFFIX`.
+/// file system): `.NAME.PID-N.SUFFIX`, with a long NAME shortened as
+/// [`super::temporaries`] says.
 pub(crate) fn temp_sibling(path: &Path, suffix: &str) -> PathBuf {
     let name = path
         .file_name()
@@ -91,7 +90,8 @@ pub(crate) fn temp_sibling(path: &Path, suffix: &str) -> PathBuf {
         _ => PathBuf::from("."),
     };
     dir.join(format!(
-        ".{name}.{}-{}.{suffix}",
+        ".{}.{}-{}.{suffix}",
+        name_in_temporary(&name, SIBLING_NAME_BUDGET),
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
     ))

@@ -11,6 +11,7 @@
 //! into place when the destination does not exist, or else moves its frames in and removes
 //! the destination's other `frame_*.obj` files (those of an earlier, longer sequence).
 
+use super::temporaries::{name_in_temporary, STAGE_NAME_BUDGET};
 use super::IoError;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -59,7 +60,9 @@ impl Staging {
     }
 
     /// A temporary path to write `dest`'s content to, in `dest`'s directory. Its name ends in
-    /// `dest`'s file name (`.stage-PID-N-NAME`), so the format chosen by extension is the same.
+    /// `dest`'s file name (`.stage-PID-N-NAME`), so the format chosen by extension is the same;
+    /// a long name stands there as a hash with the extension (see [`super::temporaries`]), so
+    /// that a destination name of up to 255 bytes has a temporary that the file system allows.
     /// With `dir`, `dest` is a frame directory: the temporary directory is created (and the
     /// missing parents of `dest` with it).
     pub fn stage(&mut self, dest: &Path, dir: bool) -> Result<PathBuf, IoError> {
@@ -73,9 +76,10 @@ impl Staging {
         // What a killed earlier run left for this destination goes first.
         super::temporaries::remove_stale_for(dest);
         let tmp = parent.join(format!(
-            ".stage-{}-{}-{name}",
+            ".stage-{}-{}-{}",
             std::process::id(),
-            COUNTER.fetch_add(1, Ordering::Relaxed)
+            COUNTER.fetch_add(1, Ordering::Relaxed),
+            name_in_temporary(&name, STAGE_NAME_BUDGET)
         ));
         super::temporaries::record(&tmp, dir);
         if dir {

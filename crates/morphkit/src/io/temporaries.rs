@@ -13,6 +13,13 @@
 //! one destination whose process is gone, and [`super::Staging::stage`] calls it for each
 //! output, so the next run of the same command cleans up after the killed one. Temporaries of
 //! other destinations and of live processes are never touched.
+//!
+//! A file name holds at most 255 bytes on common file systems, so a long destination name
+//! (a user may name an output with up to 255 bytes) stands in its temporaries' names as
+//! `HASH.EXT` ([`name_in_temporary`]): a hash of the name, with its format's extension kept.
+//! Staging allows [`STAGE_NAME_BUDGET`] bytes of the name and sibling temporaries
+//! [`SIBLING_NAME_BUDGET`], more than a staged name can have, so that a temporary written next
+//! to a staged one keeps the staged name as it is and stale ones are still recognised.
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -70,6 +77,46 @@ fn remove_where(l: &mut Vec<(PathBuf, bool)>, pred: impl Fn(&Path) -> bool) {
     }
 }
 
+/// The most bytes of its destination's name that a staged temporary's name keeps
+/// (`.stage-PID-N-NAME`, at most 40 bytes besides the name).
+pub(crate) const STAGE_NAME_BUDGET: usize = 120;
+
+/// The most bytes of its destination's name that a sibling temporary's name keeps
+/// (`.NAME.PID-N.frames.tmp`, at most 44 bytes besides the name): more than a staged
+/// temporary's name can have.
+pub(crate) const SIBLING_NAME_BUDGET: usize = 200;
+
+/// `name` as a temporary's name holds it: itself when it has at most `budget` bytes, else a
+/// hash of it followed by its format's extension (`0123456789abcdef.glb`, `….obj.gz`), so
+/// that the writers choose the same format from the temporary's name.
+pub(crate) fn name_in_temporary(name: &str, budget: usize) -> std::borrow::Cow<'_, str> {
+    if name.len() <= budget {
+        return name.into();
+    }
+    hashed_name(name).into()
+}
+
+/// `HASH.EXT` for the destination name `name`: 16 hexadecimal digits of its 64-bit FNV-1a
+/// hash (the same in every run and version) and its extension: the last one when it is a
+/// short alphanumeric one, `obj.gz` for compressed OBJ.
+fn hashed_name(name: &str) -> String {
+    let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    });
+    let lower = name.to_ascii_lowercase();
+    let ext = if lower.ends_with(".obj.gz") {
+        Some(&name[name.len() - 6..])
+    } else {
+        name.rsplit_once('.').map(|(_, e)| e).filter(|e| {
+            !e.is_empty() && e.len() <= 8 && e.bytes().all(|b| b.is_ascii_alphanumeric())
+        })
+    };
+    match ext {
+        Some(e) => format!("{hash:016x}.{e}"),
+        None => format!("{hash:016x}"),
+    }
+}
+
 /// Splits `.stage-PID-N-REST` into (PID, REST).
 fn strip_stage(name: &str) -> Option<(u32, &str)> {
     let rest = name.strip_prefix(".stage-")?;
@@ -96,7 +143,8 @@ fn strip_sibling(name: &str) -> Option<(u32, &str)> {
 pub(crate) fn temporary_of(name: &str, dest: &str) -> Option<Vec<u32>> {
     let mut pids = Vec::new();
     let mut cur = name;
-    while cur != dest {
+    let hashed = hashed_name(dest);
+    while cur != dest && cur != hashed {
         let (pid, inner) = strip_stage(cur).or_else(|| strip_sibling(cur))?;
         pids.push(pid);
         cur = inner;
@@ -181,6 +229,52 @@ mod tests {
         assert_eq!(temporary_of(".out.glb.x-3.tmp", "out.glb"), None);
         assert_eq!(temporary_of(".stage-12-0-out.glb.bak", "out.glb"), None);
         assert_eq!(temporary_of(".stage-12-0-xout.glb", "out.glb"), None);
+    }
+
+    #[test]
+    fn long_names_stand_as_a_hash_with_their_extension() {
+        let long = format!("{}.obj.gz", "a".repeat(243));
+        assert_eq!(long.len(), 250);
+        let short = name_in_temporary(&long, STAGE_NAME_BUDGET);
+        assert_eq!(short.len(), 16 + 7, "{short}");
+        assert!(short.ends_with(".obj.gz"), "{short}");
+        assert_eq!(name_in_temporary("out.glb", STAGE_NAME_BUDGET), "out.glb");
+        let other = format!("{}.obj.gz", "b".repeat(243));
+        assert_ne!(name_in_temporary(&other, STAGE_NAME_BUDGET), short);
+        let dir = "d".repeat(250);
+        assert_eq!(name_in_temporary(&dir, SIBLING_NAME_BUDGET).len(), 16);
+        let staged = format!(".stage-12-0-{short}");
+        assert_eq!(temporary_of(&staged, &long), Some(vec![12]));
+        assert_eq!(
+            temporary_of(&format!(".{staged}.12-4.tmp"), &long),
+            Some(vec![12, 12])
+        );
+        assert_eq!(
+            temporary_of(&format!(".{short}.7-3.tmp"), &long),
+            Some(vec![7])
+        );
+        assert_eq!(temporary_of(&staged, &other), None);
+    }
+
+    #[test]
+    fn a_destination_of_250_bytes_is_staged_and_written() {
+        let d = std::env::temp_dir().join(format!("morphkit-long-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        let dest = d.join(format!("{}.json", "n".repeat(245)));
+        let mut staging = super::super::Staging::new();
+        staging
+            .write(&dest, false, |tmp| super::super::write_atomic(tmp, b"{}"))
+            .unwrap();
+        let frames = d.join("f".repeat(250));
+        let tmp = staging.stage(&frames, true).unwrap();
+        super::super::write_atomic(&tmp.join("frame_0000.obj"), b"v 0 0 0\n").unwrap();
+        staging.commit().unwrap();
+        assert_eq!(std::fs::read(&dest).unwrap(), b"{}");
+        assert!(frames.join("frame_0000.obj").is_file());
+        super::super::write_atomic(&dest, b"[]").unwrap();
+        assert_eq!(std::fs::read_dir(&d).unwrap().count(), 2);
+        let _ = std::fs::remove_dir_all(&d);
     }
 
     #[test]

@@ -1,0 +1,156 @@
+//! Issue 55 (hardening, third probe): command lines the parser used to trip on, long output
+//! names, flags that did nothing, and line endings of users' files.
+
+mod common;
+use common::*;
+use std::path::{Path, PathBuf};
+
+/// A directory with the demo's files: base.obj and target.obj (a bar straight and bent).
+fn demo(name: &str) -> PathBuf {
+    let d = tmp_dir(name);
+    ok(&["demo", "--out", s(&d)]);
+    d
+}
+
+fn blend_demo<'a>(d: &'a Path, rest: &[&'a str]) -> Vec<String> {
+    let mut v = vec![
+        "blend".to_string(),
+        "--base".into(),
+        d.join("base.obj").display().to_string(),
+        "--target".into(),
+        d.join("target.obj").display().to_string(),
+    ];
+    v.extend(rest.iter().map(|x| x.to_string()));
+    v
+}
+
+fn strs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
+
+/// A command line with an argument that is not UTF-8 (a file name in Latin-1) ends in a clean
+/// error, not a panic where the command line is recorded.
+#[cfg(unix)]
+#[test]
+fn a_non_utf8_argument_is_a_clean_error() {
+    use std::os::unix::ffi::OsStrExt;
+    let d = tmp_dir("probe55-nonutf8");
+    let mut name = d.clone().into_os_string();
+    name.push(std::ffi::OsStr::from_bytes(b"/caf\xe9.obj"));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_morphkit"))
+        .arg("info")
+        .arg(&name)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.starts_with("error: "), "{err}");
+    assert!(err.contains("caf\u{fffd}.obj"), "{err}");
+}
+
+/// Negative numbers are values of the options that take numbers, checked like any other value.
+#[test]
+fn negative_numbers_are_values() {
+    let d = demo("probe55-negative");
+    let out = d.join("minus.obj");
+    ok(&strs(&blend_demo(
+        &d,
+        &["--alpha", "-0.5", "--linear", "--out", s(&out)],
+    )));
+    assert!(out.exists());
+    let e = fails(&strs(&blend_demo(
+        &d,
+        &["--alpha", "-500", "--out", s(&out)],
+    )));
+    assert!(
+        e.contains("--alpha: weight 0 is -500, expected at most 100"),
+        "{e}"
+    );
+    let e = fails(&strs(&blend_demo(
+        &d,
+        &[
+            "--frames",
+            "3",
+            "--fps",
+            "-24",
+            "--out",
+            s(&d.join("a.glb")),
+        ],
+    )));
+    assert!(e.contains("--fps -24: must be at least 0.001"), "{e}");
+    let e = fails(&strs(&blend_demo(
+        &d,
+        &["--alpha", "0.5", "--k0", "-1", "--out", s(&out)],
+    )));
+    assert!(e.contains("--k0 -1: must be greater than 0"), "{e}");
+    // A count is no negative number: clap says so, naming the flag.
+    let out = morphkit(&strs(&blend_demo(
+        &d,
+        &["--frames", "-3", "--out", s(&d.join("b.glb"))],
+    )));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("invalid value '-3' for '--frames"), "{err}");
+}
+
+/// An output name of 250 bytes (the file system allows 255) is written: its temporaries
+/// stand under a short name, and none is left behind.
+#[test]
+fn an_output_name_of_250_bytes_is_written() {
+    let d = demo("probe55-long");
+    let long = |ext: &str| d.join(format!("{}.{ext}", "x".repeat(249 - ext.len())));
+    let (obj, glb, report) = (long("obj"), long("glb"), long("json"));
+    assert_eq!(obj.file_name().unwrap().len(), 250);
+    let args = ["--alpha", "0.5", "--out", s(&obj), "--report", s(&report)];
+    ok(&strs(&blend_demo(&d, &args)));
+    ok(&strs(&blend_demo(&d, &["--frames", "3", "--out", s(&glb)])));
+    let frames = d.join("f".repeat(250));
+    ok(&["convert", s(&glb), s(&frames)]);
+    assert!(obj.is_file() && glb.is_file() && report.is_file());
+    assert!(frames.join("frame_0002.obj").is_file());
+    let left: Vec<String> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}
+
+/// Flags that act only with another one are refused without it, instead of being ignored.
+#[test]
+fn flags_that_would_do_nothing_are_refused() {
+    let d = demo("probe55-idle");
+    let out = d.join("x.obj");
+    for (flag, value, needed) in [
+        ("--mesh", "Face", "--rig"),
+        ("--animation", "Talk", "--rig"),
+        ("--refine", "2", "--interactive"),
+        ("--interactive-cache", "c.json", "--interactive"),
+    ] {
+        let args = ["--alpha", "0.5", "--linear", flag, value, "--out", s(&out)];
+        let e = fails(&strs(&blend_demo(&d, &args)));
+        assert!(
+            e.contains(&format!("{flag} is used only with {needed}")),
+            "{flag}: {e}"
+        );
+        assert!(!out.exists());
+    }
+    // An edit of a user's asset keeps its accessors: the encoding flags would be ignored.
+    let glb = d.join("anim.glb");
+    ok(&strs(&blend_demo(&d, &["--frames", "3", "--out", s(&glb)])));
+    let copy = d.join("copy.glb");
+    for flag in ["--quantize", "--sparse-targets", "--no-normals"] {
+        let e = fails(&["convert", s(&glb), s(&copy), flag]);
+        assert!(
+            e.contains(&format!(
+                "{flag} not applied to an edit of the user's asset"
+            )),
+            "{e}"
+        );
+    }
+    let e = fails(&["blend", "--rig", s(&glb), "--quantize", "--out", s(&copy)]);
+    assert!(e.contains("--quantize not applied"), "{e}");
+    assert!(!copy.exists());
+    ok(&["convert", s(&glb), s(&copy)]);
+}
