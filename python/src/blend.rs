@@ -337,7 +337,8 @@ impl PyPhysicalBlend {
     /// at ¼, ½, ¾ and of every pair of targets at (½, ½) and (0.3, 0.3), then checks that give
     /// the error estimate, on up to `threads` threads (the result does not depend on them).
     /// With `cache` (a path), a preparation of this very rig saved there is read instead (a
-    /// file of another rig or options is replaced). Returns a dict: ``snapshots``,
+    /// damaged file, or one of another rig or options, is replaced; a file that is not such a
+    /// cache raises BlendError and is left as it is). Returns a dict: ``snapshots``,
     /// ``unconverged``, ``seconds`` (this call), ``loaded`` (from the cache), ``replaced`` (why
     /// a cache file there was not used, or None). Only for surface blends.
     #[pyo3(signature = (*, threads=None, cache=None),

@@ -156,9 +156,10 @@ fn a_saved_preparation_gives_the_same_bits_and_is_refused_for_another_rig() {
         ("not ours", b"MKINTER9".repeat(8)),
         ("trailing", [bytes.clone(), vec![0; 8]].concat()),
         ("bad field tag", {
-            // The last target's last field tag sits 8 (3 #V + 1) bytes from the end.
+            // The last target's last field tag sits 8 (3 #V + 1) bytes before the 8-byte
+            // checksum (which refuses it first).
             let mut b = bytes.clone();
-            let at = b.len() - 8 * (3 * rig().num_vertices() + 1);
+            let at = b.len() - 8 - 8 * (3 * rig().num_vertices() + 1);
             b[at..at + 8].copy_from_slice(&7u64.to_le_bytes());
             b
         }),

@@ -233,7 +233,8 @@ pub struct BlendArgs {
     #[arg(long, default_value_t = 0, requires = "interactive")]
     pub refine: usize,
     /// With --interactive: a file keeping the preparation; read when it holds one of this
-    /// very rig (same shapes and options), otherwise written (replaced) after preparing.
+    /// very rig (same shapes and options), otherwise written (replaced) after preparing; a
+    /// file that is not such a cache (does not start with MKINTER) is refused, never replaced.
     #[arg(long, requires = "interactive")]
     pub interactive_cache: Option<PathBuf>,
 }

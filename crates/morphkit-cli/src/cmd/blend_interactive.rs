@@ -28,10 +28,10 @@ pub fn prepare(solver: &mut PhysicalBlend, a: &BlendArgs, threads: usize) -> any
             }
         }
     };
-    if let (Some(path), Some(why)) = (&a.interactive_cache, &used.replaced) {
+    if let Some(why) = &used.replaced {
+        // `why` names the file.
         eprintln!(
-            "note: {} was not a preparation of this rig ({why}); prepared again and replaced it",
-            path.display()
+            "note: the interactive cache was not a preparation of this rig ({why}); prepared again and replaced it"
         );
     }
     let space = solver.interactive_space().expect("prepared above");

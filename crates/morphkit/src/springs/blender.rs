@@ -4,7 +4,7 @@
 
 use super::frame_solver::{report_lost, FrameSolver};
 use super::interactive::{
-    decode, encode, fine_target, snapshot_coefficients, InteractiveSpace, CHECKS,
+    decode, encode, fine_target, is_cache_head, snapshot_coefficients, InteractiveSpace, CHECKS,
 };
 use super::options::{BlendOptions, BlendResult, RigSummary};
 use super::predictor::BlendPredictor;
@@ -434,9 +434,14 @@ impl PhysicalBlend {
 
     /// [`prepare_interactive`](Self::prepare_interactive) through a cache file: where `path`
     /// holds a preparation of this very rig (same shapes, triangles, options and terms), it is
-    /// read instead of solved; otherwise (no file, damaged, another rig) the preparation runs
-    /// and replaces it, written atomically. Once prepared, the file is only written where
-    /// there is none, never read. Fails only when the file cannot be written.
+    /// read instead of solved; otherwise (no file, empty, damaged, another format version,
+    /// another rig) the preparation runs and replaces it, written atomically, and
+    /// [`InteractiveCacheUse::replaced`] says why, naming the file. Once prepared, the file is
+    /// only written where there is none, never read.
+    ///
+    /// Fails when the file cannot be written, and, leaving it untouched, when it cannot be
+    /// read or is not a morphkit interactive preparation of any version (it does not start
+    /// with `MKINTER`): a path given by mistake is never overwritten.
     pub fn prepare_interactive_cached(
         &mut self,
         threads: usize,
@@ -452,18 +457,17 @@ impl PhysicalBlend {
             }
             return Ok(unused);
         }
-        let replaced = match std::fs::read(path) {
-            Ok(bytes) => match self.load_interactive(&bytes) {
+        let replaced = match read_cache(path)? {
+            Some(bytes) => match self.load_interactive(&bytes) {
                 Ok(_) => {
                     return Ok(InteractiveCacheUse {
                         loaded: true,
                         ..unused
                     })
                 }
-                Err(e) => Some(e.to_string()),
+                Err(e) => Some(format!("{}: {e}", path.display())),
             },
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-            Err(e) => Some(format!("unreadable: {e}")),
+            None => None,
         };
         self.prepare_interactive(threads);
         self.write_interactive(path)?;
@@ -498,11 +502,43 @@ impl PhysicalBlend {
     }
 }
 
+/// The bytes of an interactive cache file (`None` where there is none), refusing a file that
+/// cannot be read or is not a cache: only its first bytes are read to tell.
+fn read_cache(path: &std::path::Path) -> Result<Option<Vec<u8>>, BlendError> {
+    use std::io::Read;
+    let fail = |problem: String| BlendError::InteractiveCache { problem };
+    let cannot = |e: std::io::Error| {
+        fail(format!(
+            "cannot read {} to check that it is a cache: {e}; it was left as it is",
+            path.display()
+        ))
+    };
+    let mut file = match std::fs::File::open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(cannot(e)),
+    };
+    let mut head = Vec::new();
+    (&mut file).take(8).read_to_end(&mut head).map_err(cannot)?;
+    if !is_cache_head(&head) {
+        let shown: Vec<String> = head.iter().map(|b| format!("{b:02x}")).collect();
+        return Err(fail(format!(
+            "{} is not a morphkit interactive preparation (it starts with {}, not MKINTER); \
+             refusing to replace it: give the cache another path",
+            path.display(),
+            shown.join(" ")
+        )));
+    }
+    let mut bytes = head;
+    file.read_to_end(&mut bytes).map_err(cannot)?;
+    Ok(Some(bytes))
+}
+
 /// How [`PhysicalBlend::prepare_interactive_cached`] used its file.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct InteractiveCacheUse {
     /// The preparation was read from the file (no solves).
     pub loaded: bool,
-    /// Why a file that was there was not used (it was replaced).
+    /// Why a file that was there was not used (it was replaced), naming the file.
     pub replaced: Option<String>,
 }

@@ -26,9 +26,11 @@
 //! products with $D_A$ (a few dozen columns), never a factorization.
 
 mod cache;
+#[cfg(test)]
+mod cache_tests;
 mod solve;
 
-pub(super) use cache::{decode, encode};
+pub(super) use cache::{decode, encode, is_cache_head};
 
 use super::reference::Factor;
 use super::rig::Rig;
