@@ -154,3 +154,25 @@ fn flags_that_would_do_nothing_are_refused() {
     assert!(!copy.exists());
     ok(&["convert", s(&glb), s(&copy)]);
 }
+
+/// OBJ files of old Mac tools (CR line breaks) are read, and an OBJ written back through the
+/// input's own file keeps its line breaks (CRLF here).
+#[test]
+fn obj_line_breaks_are_read_and_kept() {
+    let d = demo("probe55-eol");
+    let text = std::fs::read_to_string(d.join("base.obj")).unwrap();
+    let mac = d.join("mac.obj");
+    std::fs::write(&mac, text.replace('\n', "\r")).unwrap();
+    let info = ok(&["info", "--json", s(&mac)]);
+    let want = ok(&["info", "--json", s(&d.join("base.obj"))]);
+    let triangles =
+        |j: &str| serde_json::from_str::<serde_json::Value>(j).unwrap()[0]["triangles"].clone();
+    assert_eq!(triangles(&info), triangles(&want));
+    let dos = d.join("dos.obj");
+    std::fs::write(&dos, text.replace('\n', "\r\n")).unwrap();
+    let out = d.join("back.obj");
+    ok(&["convert", s(&dos), s(&out)]);
+    let back = std::fs::read_to_string(&out).unwrap();
+    assert!(back.contains("\r\n"));
+    assert_eq!(back.matches('\n').count(), back.matches("\r\n").count());
+}

@@ -233,6 +233,27 @@ mod tests {
     }
 
     #[test]
+    fn cr_only_line_endings_are_lines() {
+        let text = "v 0 0 0\rv 1 0 0\rv 0 1 0\rv 1 1 0\rf 1 2 3\rf 2 4 3\r";
+        assert_eq!(parse(text).unwrap().triangles, vec![[0, 1, 2], [1, 3, 2]]);
+        let e = parse("v 0 0 0\rv 1 x 0\r").unwrap_err().to_string();
+        assert!(e.contains("t.obj:2"), "{e}");
+        // The same read from a file, plain and gzip-compressed (a stream split into lines).
+        let d = std::env::temp_dir().join(format!("morphkit-obj-cr-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let plain = d.join("mac.obj");
+        std::fs::write(&plain, text).unwrap();
+        let gz = d.join("mac.obj.gz");
+        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+        enc.write_all(text.as_bytes()).unwrap();
+        std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+        for p in [&plain, &gz] {
+            assert_eq!(read_obj(p).unwrap().triangles.len(), 2, "{}", p.display());
+        }
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
     fn errors_name_the_line() {
         let e = parse("v 0 0 0\nv 1 x 0\n").unwrap_err().to_string();
         assert!(

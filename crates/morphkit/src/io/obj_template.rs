@@ -7,9 +7,10 @@
 //! for the solve, see [`crate::mesh::Weld`]), so vertex `k` of a result is the file's `k`-th
 //! `v` record. Extra components of a `v` record (`w`, vertex colours) are kept. A normal is
 //! the area-weighted sum of the normals of the faces whose corners use it, so hard edges and
-//! smoothing stay as the artist split them; a normal no face uses is kept.
+//! smoothing stay as the artist split them; a normal no face uses is kept. Lines keep their
+//! own breaks (`\n`, `\r\n`, or `\r` from old Mac tools).
 
-use super::source::{lines, parse_i64, tokens};
+use super::source::{lines, lines_with_ends, parse_i64, tokens};
 use super::IoError;
 use crate::mesh::{cross, sub, Point};
 use std::io::Write;
@@ -66,7 +67,7 @@ impl ObjTemplate {
         let normals = self.normals(positions);
         let mut w = Vec::with_capacity(self.text.len() + self.text.len() / 4);
         let (mut v, mut n) = (0usize, 0usize);
-        for (_, line) in lines(&self.text) {
+        for (_, line, end) in lines_with_ends(&self.text) {
             let mut toks = tokens(line);
             match toks.next() {
                 Some(b"v") => {
@@ -87,11 +88,9 @@ impl ObjTemplate {
                 }
                 _ => w.extend_from_slice(line),
             }
-            w.push(b'\n');
+            // Each line keeps its own break (`\n`, `\r\n` or `\r`), the last none.
+            w.extend_from_slice(end);
         }
-        // The line break after the last line `lines` yields (an empty one after a final
-        // break) is not in the file.
-        w.pop();
         Ok(w)
     }
 
@@ -214,6 +213,15 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("3 positions for the 4 vertices of"), "{e}");
+        // CRLF and CR-only files come back with their own line breaks.
+        for eol in ["\r\n", "\r"] {
+            let p = d.join("eol.obj");
+            std::fs::write(&p, CUBE_FACE.replace('\n', eol)).unwrap();
+            let t = ObjTemplate::read(&p).unwrap();
+            assert_eq!(t.num_vertices(), 4);
+            let text = String::from_utf8(t.fill(&d.join("o.obj"), &turned).unwrap()).unwrap();
+            assert_eq!(text, want.replace('\n', eol), "{eol:?}");
+        }
         let _ = std::fs::remove_dir_all(&d);
     }
 }

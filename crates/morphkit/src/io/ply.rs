@@ -177,6 +177,17 @@ pub(super) fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, IoError>
                 let name = t
                     .next()
                     .ok_or_else(|| err("property without a name".into()))?;
+                // A list would be read as one number (its count is skipped): every vertex
+                // would sit at 0 along that axis.
+                if el.name == "vertex"
+                    && matches!(name, "x" | "y" | "z")
+                    && matches!(kind, Kind::List { .. })
+                {
+                    return Err(err(format!(
+                        "the vertex coordinate '{name}' is declared as a list ('{line}'); a \
+                         coordinate must be one number (property float {name})"
+                    )));
+                }
                 el.props.push(Property {
                     name: name.to_string(),
                     kind,
@@ -487,6 +498,27 @@ mod tests {
         let m = parse_ply(Path::new("t.ply"), text.as_bytes()).unwrap();
         assert_eq!(m.triangles, vec![[0, 1, 2]]);
         assert_eq!(m.positions[1], [1.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn a_coordinate_declared_as_a_list_is_refused() {
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty list uchar float x\n\
+                    property float y\nproperty float z\nelement face 1\n\
+                    property list uchar int vertex_indices\nend_header\n\
+                    1 1 0 0\n1 2 0 0\n1 3 1 0\n3 0 1 2\n";
+        let e = parse_ply(Path::new("listed.ply"), text.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("listed.ply:4: the vertex coordinate 'x' is declared as a list"),
+            "{e}"
+        );
+        // Lists elsewhere, and of other names, are read and skipped as before.
+        let ok = text
+            .replace("list uchar float x", "float x")
+            .replace("1 1 0 0\n1 2 0 0\n1 3 1 0", "1 0 0\n2 0 0\n3 1 0");
+        let m = parse_ply(Path::new("ok.ply"), ok.as_bytes()).unwrap();
+        assert_eq!(m.positions[2], [3.0, 1.0, 0.0]);
     }
 
     #[test]

@@ -220,12 +220,15 @@ impl<R: BufRead> std::io::BufRead for CountingReader<'_, R> {
     }
 }
 
-/// Splits a stream of chunks into lines, keeping only the unfinished last line.
+/// Splits a stream of chunks into lines (ended by `\n`, `\r\n` or a lone `\r`, as [`lines`]
+/// splits them), keeping only the unfinished last line.
 #[derive(Default)]
 struct LineSplitter {
     partial: Vec<u8>,
     number: usize,
     bytes: u64,
+    /// The last line ended with `\r`: a `\n` at the start of the next chunk belongs to it.
+    after_cr: bool,
 }
 
 impl LineSplitter {
@@ -239,18 +242,26 @@ impl LineSplitter {
             chunk = strip_bom(chunk);
         }
         self.bytes += chunk.len() as u64;
-        while let Some(i) = chunk.iter().position(|&b| b == b'\n') {
+        loop {
+            if self.after_cr && !chunk.is_empty() {
+                self.after_cr = false;
+                chunk = chunk.strip_prefix(b"\n").unwrap_or(chunk);
+            }
+            let Some(i) = chunk.iter().position(|&b| b == b'\n' || b == b'\r') else {
+                break;
+            };
             self.number += 1;
             if self.partial.is_empty() {
-                f(self.number, strip_cr(&chunk[..i]))?;
+                f(self.number, &chunk[..i])?;
             } else {
                 self.partial.extend_from_slice(&chunk[..i]);
                 self.check(path)?;
                 let line = std::mem::take(&mut self.partial);
-                f(self.number, strip_cr(&line))?;
+                f(self.number, &line)?;
                 self.partial = line;
                 self.partial.clear();
             }
+            self.after_cr = chunk[i] == b'\r';
             chunk = &chunk[i + 1..];
         }
         self.partial.extend_from_slice(chunk);
@@ -275,12 +286,8 @@ impl LineSplitter {
         self,
         f: &mut impl FnMut(usize, &[u8]) -> Result<(), IoError>,
     ) -> Result<(), IoError> {
-        f(self.number + 1, strip_cr(&self.partial))
+        f(self.number + 1, &self.partial)
     }
-}
-
-fn strip_cr(l: &[u8]) -> &[u8] {
-    l.strip_suffix(b"\r").unwrap_or(l)
 }
 
 /// `bytes` without a leading UTF-8 byte-order mark (`EF BB BF`), which some Windows editors
@@ -294,11 +301,36 @@ pub fn strip_bom_str(text: &str) -> &str {
     text.strip_prefix('\u{feff}').unwrap_or(text)
 }
 
-/// Lines of `bytes` with their 1-based numbers, `\r\n` and `\n` endings stripped.
+/// Lines of `bytes` with their 1-based numbers, the `\n`, `\r\n` and lone `\r` (classic Mac)
+/// endings stripped.
 pub(crate) fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, &[u8])> {
-    bytes.split(|&b| b == b'\n').enumerate().map(|(i, l)| {
-        let l = l.strip_suffix(b"\r").unwrap_or(l);
-        (i + 1, l)
+    lines_with_ends(bytes).map(|(n, l, _)| (n, l))
+}
+
+/// Lines of `bytes` as [`lines`] splits them, each with its line break as the file has it
+/// (`\n`, `\r\n` or `\r`; empty for the last line), so that a file can be written back with
+/// its own line breaks. Text ending in a line break has an empty last line.
+pub(crate) fn lines_with_ends(bytes: &[u8]) -> impl Iterator<Item = (usize, &[u8], &[u8])> {
+    let mut rest = Some(bytes);
+    let mut number = 0;
+    std::iter::from_fn(move || {
+        let b = rest?;
+        number += 1;
+        match b.iter().position(|&c| c == b'\n' || c == b'\r') {
+            Some(i) => {
+                let end = if b[i] == b'\r' && b.get(i + 1) == Some(&b'\n') {
+                    i + 2
+                } else {
+                    i + 1
+                };
+                rest = Some(&b[end..]);
+                Some((number, &b[..i], &b[i..end]))
+            }
+            None => {
+                rest = None;
+                Some((number, b, &b[..0]))
+            }
+        }
     })
 }
 
@@ -326,4 +358,39 @@ pub(crate) fn parse_f64(tok: &[u8]) -> Option<f64> {
 /// Parses a signed integer token.
 pub(crate) fn parse_i64(tok: &[u8]) -> Option<i64> {
     std::str::from_utf8(tok).ok()?.parse().ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_end_in_lf_crlf_or_a_lone_cr() {
+        let text = b"a\nb\r\nc\rd\r\r\ne";
+        let got: Vec<(usize, &[u8], &[u8])> = lines_with_ends(text).collect();
+        let want: Vec<(usize, &[u8], &[u8])> = vec![
+            (1, b"a", b"\n"),
+            (2, b"b", b"\r\n"),
+            (3, b"c", b"\r"),
+            (4, b"d", b"\r"),
+            (5, b"", b"\r\n"),
+            (6, b"e", b""),
+        ];
+        assert_eq!(got, want);
+        // A stream splits the same wherever its chunks end (a \r\n across two chunks too).
+        for cut in 0..=text.len() {
+            let mut split = LineSplitter::default();
+            let mut seen: Vec<(usize, Vec<u8>)> = Vec::new();
+            let mut f = |n: usize, l: &[u8]| {
+                seen.push((n, l.to_vec()));
+                Ok(())
+            };
+            let p = Path::new("t");
+            split.push(p, &text[..cut], &mut f).unwrap();
+            split.push(p, &text[cut..], &mut f).unwrap();
+            split.finish(&mut f).unwrap();
+            let want: Vec<(usize, Vec<u8>)> = lines(text).map(|(n, l)| (n, l.to_vec())).collect();
+            assert_eq!(seen, want, "cut at {cut}");
+        }
+    }
 }

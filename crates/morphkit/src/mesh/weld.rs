@@ -191,7 +191,7 @@ impl Weld {
         let group = |v: u32| coincident.to_welded[v as usize];
         // Per edge between two groups (smaller group first): its input edges, each with the
         // endpoint in the smaller group first, and how many triangles use it.
-        let mut edges: FastMap<(u32, u32), Vec<(u32, u32, u32)>> = FastMap::default();
+        let mut edges: FastMap<(u32, u32), Vec<EdgeUse>> = FastMap::default();
         let mut collapsed = Vec::new();
         for t in triangles {
             if t.iter().any(|&v| v as usize >= n) {
@@ -417,6 +417,10 @@ fn folded_onto(p: &[Point], a: u32, b: u32, o0: u32, o1: u32) -> bool {
     let n = w0.norm() * w1.norm();
     n > 0.0 && w0.dot(&w1) > n * (1.0 - 5e-5)
 }
+
+/// One triangle's use of an edge: its two ends (the one in the smaller group first) and the
+/// triangle's third corner.
+type EdgeUse = (u32, u32, u32);
 
 /// The root of `v`'s tree, halving the path on the way.
 fn find(parent: &mut [u32], mut v: u32) -> u32 {
