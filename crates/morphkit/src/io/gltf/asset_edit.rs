@@ -436,7 +436,10 @@ impl GltfAsset {
         frames: &[Vec<Point>],
     ) -> Result<(), IoError> {
         let bad = |m: String| IoError::content(&self.path, format!("animation '{clip_name}': {m}"));
-        if frames.is_empty() || times.len() != frames.len() {
+        if frames.is_empty() {
+            return Err(bad("no frames to animate (the frames are empty)".into()));
+        }
+        if times.len() != frames.len() {
             return Err(bad(format!(
                 "{} times for {} frames",
                 times.len(),

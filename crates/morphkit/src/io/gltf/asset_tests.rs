@@ -364,6 +364,9 @@ fn edits_refuse_what_gltf_or_the_name_rule_forbids() {
         e.contains("animation 'c': key time 0 is -2 s; glTF key times must not be negative"),
         "{e}"
     );
+    // No frames is said as such, not as a count mismatch.
+    let e = err(a.clone().add_frame_animation("c", &[], &[]));
+    assert!(e.contains("animation 'c': no frames to animate"), "{e}");
     // Target names follow the name rule (the CLI's `rig` applies the same one).
     for bad in ["", ".", "..", "../x", "a\\b"] {
         let e = err(a.clone().add_targets(&[bad.to_string()], &frames[..1]));
