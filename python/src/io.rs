@@ -130,7 +130,8 @@ pub fn read_animation<'py>(
 /// With `template` (a `.glb`/`.gltf`, written to a `.glb`/`.gltf` `path`), the frames are added
 /// to that asset instead: one morph target per frame on its mesh (`mesh` chooses it by name)
 /// and an animation `clip` (default `morphkit`) keying them at `times` (default `k / fps`
-/// seconds); its materials, skins, other meshes and nodes are kept, and `F` is not needed
+/// seconds; glTF keys are not negative and increase); its materials, skins, other meshes and
+/// nodes are kept, and `F` is not needed
 /// (the template's). `max_targets` (default 200; 0 for no limit) refuses a mesh that would get
 /// more targets than WebGL2 viewers play.
 ///

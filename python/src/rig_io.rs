@@ -80,8 +80,9 @@ pub fn read_rig<'py>(
 }
 
 /// Writes the asset `template` (a `.glb`/`.gltf`) to `path` with morph targets added to its
-/// mesh: `targets` `(k, n, 3)` absolute positions in the mesh's own space, named `names`; a
-/// name the mesh already has replaces that target. `base` `(n, 3)` gives the mesh new base
+/// mesh: `targets` `(k, n, 3)` absolute positions in the mesh's own space, named `names`
+/// (by the CLI's rule: not empty, `.` or `..`, no `/`, `\` or NUL); a name the mesh already
+/// has replaces that target. `path` is a `.glb` or `.gltf`. `base` `(n, 3)` gives the mesh new base
 /// positions first (existing targets keep their displacements). Everything else in the asset
 /// is kept. `max_targets` (default 200, what WebGL2 viewers play; 0 for no limit) refuses a
 /// mesh that would get more targets. The write is atomic; `template` is never overwritten.

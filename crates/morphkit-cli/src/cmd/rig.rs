@@ -82,7 +82,7 @@ fn stem(p: &Path) -> String {
 /// Names must be usable as file names in --shapes-dir and be distinct.
 fn check_names(names: &[String]) -> anyhow::Result<()> {
     for (i, n) in names.iter().enumerate() {
-        if n.is_empty() || n == "." || n == ".." || n.contains(['/', '\\', '\0']) {
+        if !io::is_valid_target_name(n) {
             bail!("shape {i}: the name '{n}' cannot be a morph-target or file name");
         }
         if let Some(j) = names[..i].iter().position(|m| m == n) {

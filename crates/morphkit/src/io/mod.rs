@@ -41,6 +41,7 @@ pub use colors::{diverging, scalar_colors, viridis, Colors, NAN_GREY};
 pub use error::IoError;
 pub use format::Format;
 pub use frame_stream::FrameStream;
+pub use gltf::is_valid_target_name;
 pub use gltf::{
     parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs, read_gltf_morphs_with,
     write_gltf_morphs, write_gltf_scene, write_gltf_scene_with, write_gltf_with, GltfAsset,

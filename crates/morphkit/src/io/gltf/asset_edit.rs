@@ -224,14 +224,28 @@ impl GltfAsset {
     /// animations kept); other names are appended with weight 0 everywhere (see the
     /// [module documentation](self)). Names are stored in `mesh.extras.targetNames`.
     ///
-    /// Errors: a split rig, names and positions of different counts, a name given twice,
-    /// positions of another count than `#V` or that `f32` cannot hold, more targets than
+    /// Errors: a split rig, names and positions of different counts, a name given twice or
+    /// that [`super::is_valid_target_name`] refuses (empty, `..`, a path), positions of another
+    /// count than `#V` or that `f32` cannot hold, more targets than
     /// [`GltfAsset::max_targets`].
     pub fn add_targets(
         &mut self,
         names: &[String],
         positions: &[Vec<Point>],
     ) -> Result<(), IoError> {
+        if let Some((i, n)) = names
+            .iter()
+            .enumerate()
+            .find(|(_, n)| !super::is_valid_target_name(n))
+        {
+            return Err(IoError::content(
+                &self.path,
+                format!(
+                    "target {i}: the name '{n}' cannot be a morph-target or file name (empty, \
+                     '.', '..', or holding '/', '\\' or NUL)"
+                ),
+            ));
+        }
         self.add_targets_at(names, positions).map(|_| ())
     }
 
@@ -413,7 +427,8 @@ impl GltfAsset {
     /// animations get weight 0 for the new targets (see the [module documentation](self)).
     ///
     /// Errors: those of [`GltfAsset::add_targets`]; no frame, times and frames of different
-    /// counts, times not finite or not strictly increasing as `f32`, no node using the mesh.
+    /// counts, times negative (glTF keys start at 0 s or later), not finite or not strictly
+    /// increasing as `f32`, no node using the mesh.
     pub fn add_frame_animation(
         &mut self,
         clip_name: &str,
@@ -421,7 +436,10 @@ impl GltfAsset {
         frames: &[Vec<Point>],
     ) -> Result<(), IoError> {
         let bad = |m: String| IoError::content(&self.path, format!("animation '{clip_name}': {m}"));
-        if frames.is_empty() || times.len() != frames.len() {
+        if frames.is_empty() {
+            return Err(bad("no frames to animate (the frames are empty)".into()));
+        }
+        if times.len() != frames.len() {
             return Err(bad(format!(
                 "{} times for {} frames",
                 times.len(),
@@ -434,6 +452,12 @@ impl GltfAsset {
             return Err(bad(
                 "key times must be finite and strictly increasing (as f32)".into(),
             ));
+        }
+        if times[0] < 0.0 {
+            return Err(bad(format!(
+                "key time 0 is {} s; glTF key times must not be negative",
+                times[0]
+            )));
         }
         let nodes = self.mesh_nodes();
         if nodes.is_empty() {

@@ -348,6 +348,49 @@ fn a_frame_animation_keys_one_new_target_per_frame() {
 }
 
 #[test]
+fn edits_refuse_what_gltf_or_the_name_rule_forbids() {
+    let d = tmp("refusals");
+    let p = d.join("a.gltf");
+    fixture::write(&p, &fixture::standard(false, 100.0));
+    let a = read(&p);
+    let base = a.morphs().base.positions.clone();
+    let frames = vec![base.clone(), base.clone(), base.clone()];
+    let err = |r: Result<(), crate::io::IoError>| r.unwrap_err().to_string();
+    // glTF key times are not negative.
+    let e = err(a
+        .clone()
+        .add_frame_animation("c", &[-2.0, -1.0, 0.0], &frames));
+    assert!(
+        e.contains("animation 'c': key time 0 is -2 s; glTF key times must not be negative"),
+        "{e}"
+    );
+    // No frames is said as such, not as a count mismatch.
+    let e = err(a.clone().add_frame_animation("c", &[], &[]));
+    assert!(e.contains("animation 'c': no frames to animate"), "{e}");
+    // Target names follow the name rule (the CLI's `rig` applies the same one).
+    for bad in ["", ".", "..", "../x", "a\\b"] {
+        let e = err(a.clone().add_targets(&[bad.to_string()], &frames[..1]));
+        assert!(
+            e.contains("cannot be a morph-target or file name"),
+            "{bad:?}: {e}"
+        );
+    }
+    // An asset is written as .glb or .gltf only, never as glTF in a file of another format.
+    for name in ["anim.pc2", "anim.obj", "anim.usda", "anim"] {
+        let out = d.join(name);
+        let e = err(a.write(&out, &GltfAssetOptions::default()));
+        assert!(
+            e.contains("unsupported format; expected .glb or .gltf"),
+            "{e}"
+        );
+        assert!(!out.exists());
+    }
+    a.write(&d.join("ok.GLB"), &GltfAssetOptions::default())
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
 fn external_buffers_and_images_are_embedded() {
     let d = tmp("external");
     let (src, dst) = (d.join("src"), d.join("dst"));

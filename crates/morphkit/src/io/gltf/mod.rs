@@ -110,6 +110,14 @@ use crate::mesh::{Point, TriMesh};
 /// layer and one uniform per target plus its other uniforms.
 pub const SAFE_MORPH_TARGETS: usize = 200;
 
+/// True for a name that a morph target (and the file that holds it, as the CLI's
+/// `rig --shapes-dir` writes one file per target) may have: not empty, not `.` or `..`, and
+/// without `/`, `\` or NUL. [`GltfAsset::add_targets`] refuses other names; every client
+/// (the CLI, the Python module) applies this one rule.
+pub fn is_valid_target_name(name: &str) -> bool {
+    !(name.is_empty() || name == "." || name == ".." || name.contains(['/', '\\', '\0']))
+}
+
 /// How [`write_gltf_with`] writes a rig (see the [module documentation](self) for the layout).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GltfOptions {

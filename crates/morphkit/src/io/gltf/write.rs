@@ -463,11 +463,20 @@ pub fn write_gltf_with(
     Ok(summary)
 }
 
-/// Writes a finished document and its buffer as GLB (`.glb`) or glTF with a data URI.
+/// Writes a finished document and its buffer as GLB (`.glb`) or glTF with a data URI
+/// (`.gltf`); any other extension is an [`IoError::UnknownFormat`] (glTF written into a file
+/// named `.pc2` or `.obj` would be read back as that format).
 pub(super) fn write_document(path: &Path, mut doc: Value, bin: &[u8]) -> Result<(), IoError> {
-    let glb = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    let glb = match crate::io::Format::from_path(path) {
+        Some(crate::io::Format::Glb) => true,
+        Some(crate::io::Format::Gltf) => false,
+        _ => {
+            return Err(IoError::UnknownFormat {
+                path: path.to_path_buf(),
+                expected: ".glb or .gltf",
+            })
+        }
+    };
     let bytes = if glb {
         let mut json =
             serde_json::to_vec(&doc).map_err(|e| IoError::content(path, e.to_string()))?;
