@@ -63,6 +63,9 @@ fn main() {
     if let Some(h) = std::env::var("HOLD_RAMP").ok().and_then(|v| v.parse().ok()) {
         options.hold_ramp = h;
     }
+    if let Some(m) = std::env::var("MAXIT").ok().and_then(|v| v.parse().ok()) {
+        options.max_newton_iterations = m;
+    }
     if std::env::var("NO_SAMPLED").is_ok() {
         options.sampled_start = false;
     }
@@ -82,6 +85,25 @@ fn main() {
         })
         .unwrap_or_default();
     let n = welded.len() - 1;
+    // ONE="i:w,j:w": solve that one frame and print its statistics.
+    if let Ok(one) = std::env::var("ONE") {
+        let mut w = vec![0.0; n];
+        for kv in one.split(',') {
+            let (i, v) = kv.split_once(':').unwrap();
+            w[i.parse::<usize>().unwrap()] = v.parse().unwrap();
+        }
+        let t = std::time::Instant::now();
+        let r = solver.solve(&Weights::Delta(w.clone())).unwrap();
+        println!(
+            "{w:?}: converged {}, {} Newton, {} rejected, {} factorizations, {:.1} s",
+            r.stats.converged,
+            r.stats.newton_iterations,
+            r.stats.rejected_steps,
+            r.stats.factorizations,
+            t.elapsed().as_secs_f64()
+        );
+        return;
+    }
     let weights: Vec<Weights> = (0..=steps)
         .map(|k| {
             let mut w = vec![0.0; n];

@@ -131,6 +131,10 @@ impl Rig {
 
     /// The predictor $P(c)$ in world coordinates.
     pub(super) fn predicted(&self, c: &[f64]) -> Vec<Point> {
+        if let Some(s) = super::weights::one_hot(c) {
+            // Exactly the shape (the Poisson solve and the alignment give it to round-off).
+            return self.shapes.positions(s).to_vec();
+        }
         let lin = linear(&self.shapes, c);
         let holds = self.holds.targets(c, &lin);
         self.world_prediction(&lin, self.rotation_prediction(c, &lin, &holds).as_deref())

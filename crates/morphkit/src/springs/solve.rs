@@ -13,6 +13,7 @@ use super::reference::{Factor, Reference, References, GRID, PROBE};
 use super::rig::Rig;
 use super::sampled_start::{half_weight, shifted, SampleSolver, StartSamples, PAIR, SAMPLES};
 use super::terms::PointTarget;
+use super::weights::one_hot;
 use super::workspace::Workspace;
 use super::BlendError;
 use crate::mesh::Point;
@@ -268,13 +269,4 @@ fn difference(x: &[Point], p: &[Point]) -> Vec<Point> {
         .zip(p)
         .map(|(x, p)| std::array::from_fn(|k| x[k] - p[k]))
         .collect()
-}
-
-/// The shape that coefficients `c` select alone (`c = e_s`), if any.
-pub(super) fn one_hot(c: &[f64]) -> Option<usize> {
-    let s = c.iter().position(|&x| x == 1.0)?;
-    c.iter()
-        .enumerate()
-        .all(|(k, &x)| k == s || x == 0.0)
-        .then_some(s)
 }

@@ -16,6 +16,16 @@ pub enum Weights {
     Delta(Vec<f64>),
 }
 
+/// The shape that coefficients `c` select alone (`c = e_s`), if any: where the frame and the
+/// predictor are that shape's own numbers.
+pub(crate) fn one_hot(c: &[f64]) -> Option<usize> {
+    let s = c.iter().position(|&x| x == 1.0)?;
+    c.iter()
+        .enumerate()
+        .all(|(k, &x)| k == s || x == 0.0)
+        .then_some(s)
+}
+
 /// Largest magnitude accepted for any single weight. Weights far outside `[0, 1]` are
 /// extrapolations that no spring system follows meaningfully.
 pub const MAX_WEIGHT: f64 = 100.0;
