@@ -506,14 +506,14 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let failed_ply = (!unconverged.is_empty()).then(|| unconverged_path(&a.out));
     if let Some(path) = &failed_ply {
         let count = failed.iter().filter(|f| **f).count();
-        eprintln!(
+        outputs.warn_after_commit(format!(
             "warning: {} of {} frames did not converge (frames {:?}{}); {count} vertices fail, shown red in {}",
             unconverged.len(),
             weights.len(),
             &unconverged[..unconverged.len().min(10)],
             if unconverged.len() > 10 { ", …" } else { "" },
             path.display()
-        );
+        ));
         write_region(&mut outputs, path, shapes.base(), &failed)?;
     }
     if let Some(&(_, worst)) = uncertain.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {
