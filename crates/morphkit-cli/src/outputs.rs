@@ -232,6 +232,8 @@ pub use plan::{is_frame_dir, Kind, Plan};
 #[derive(Debug)]
 pub struct Outputs {
     staging: Staging,
+    /// Warnings that name a staged output, printed by [`Outputs::commit`].
+    notes: Vec<String>,
 }
 
 impl Outputs {
@@ -401,24 +403,18 @@ impl Outputs {
         target: &Path,
         clip: &str,
     ) -> anyhow::Result<()> {
-        let gltf = |p: &Path| matches!(Format::from_path(p), Some(Format::Glb | Format::Gltf));
-        if gltf(target) && gltf(path) && !is_frame_dir(path) {
-            let mut asset = io::GltfAsset::read(target, &io::GltfReadOptions::default())?;
-            if asset.morphs().base.num_vertices() == frames.num_vertices() {
-                asset.set_max_targets(asset_max_targets());
-                let positions: Vec<Vec<morphkit::mesh::Point>> = (0..frames.len())
-                    .map(|k| frames.positions(k).to_vec())
-                    .collect();
-                let times: Vec<f64> = (0..frames.len()).map(|k| k as f64 / opts.fps).collect();
-                asset.add_frame_animation(clip, &times, &positions)?;
-                self.gltf_asset(path, &asset, &opts.inputs, frames.len())?;
-                eprintln!(
-                    "added the animation '{clip}' ({} frames, one morph target each) to the asset of {}",
-                    frames.len(),
-                    target.display()
-                );
-                return Ok(());
-            }
+        if let Some(mut asset) = target_asset(path, target, frames.num_vertices())? {
+            let positions: Vec<Vec<morphkit::mesh::Point>> = (0..frames.len())
+                .map(|k| frames.positions(k).to_vec())
+                .collect();
+            asset.add_frame_animation(clip, &clip_times(frames.len(), opts.fps), &positions)?;
+            self.gltf_asset(path, &asset, &opts.inputs, frames.len())?;
+            eprintln!(
+                "added the animation '{clip}' ({} frames, one morph target each) to the asset of {}",
+                frames.len(),
+                target.display()
+            );
+            return Ok(());
         }
         let mut opts = opts.clone();
         if opts.obj_template.is_none() {
@@ -469,8 +465,65 @@ impl Outputs {
 
     /// Moves every staged output into place.
     pub fn commit(self) -> anyhow::Result<()> {
-        Ok(self.staging.commit()?)
+        self.staging.commit()?;
+        for n in &self.notes {
+            eprintln!("{n}");
+        }
+        Ok(())
     }
+
+    /// Prints `text` on stderr once [`Outputs::commit`] has put every output in place: for a
+    /// warning that names an output written beside the result (`OUT-jumps.ply`), so that a run
+    /// failing later never points to a file it does not write.
+    pub fn warn_after_commit(&mut self, text: String) {
+        self.notes.push(text);
+    }
+}
+
+/// The user's asset that [`Outputs::frames_of_target`] edits for frames of `vertices`
+/// vertices of `target` written to `path`: `Some` when both are glTF files and the asset's mesh
+/// has that many vertices, with --max-targets set.
+fn target_asset(
+    path: &Path,
+    target: &Path,
+    vertices: usize,
+) -> anyhow::Result<Option<io::GltfAsset>> {
+    let gltf = |p: &Path| matches!(Format::from_path(p), Some(Format::Glb | Format::Gltf));
+    if !(gltf(target) && gltf(path) && !is_frame_dir(path)) {
+        return Ok(None);
+    }
+    let mut asset = io::GltfAsset::read(target, &io::GltfReadOptions::default())?;
+    if asset.morphs().base.num_vertices() != vertices {
+        return Ok(None);
+    }
+    asset.set_max_targets(asset_max_targets());
+    Ok(Some(asset))
+}
+
+/// The times of `frames` frames at `fps`: `k / fps` seconds.
+fn clip_times(frames: usize, fps: f64) -> Vec<f64> {
+    (0..frames).map(|k| k as f64 / fps).collect()
+}
+
+/// Refuses, before any frame is made, what [`Outputs::frames_of_target`] would refuse at the
+/// write of `frames` frames of `vertices` vertices as the clip `clip`: where the output is an
+/// edit of the user's asset `target`, the output flags the edit does not apply
+/// ([`check_asset_flags`]) and what the asset refuses
+/// ([`io::GltfAsset::check_frame_animation`]: more morph targets than --max-targets, no node
+/// to play the clip).
+pub fn check_frames_of_target(
+    path: &Path,
+    target: &Path,
+    vertices: usize,
+    frames: usize,
+    clip: &str,
+    fps: f64,
+) -> anyhow::Result<()> {
+    if let Some(asset) = target_asset(path, target, vertices)? {
+        check_asset_flags(path)?;
+        asset.check_frame_animation(clip, &clip_times(frames, fps), frames)?;
+    }
+    Ok(())
 }
 
 /// Tells on stderr when a glTF animation was split or will not play everywhere.

@@ -164,7 +164,10 @@ impl Plan {
         for o in self.outputs.iter().filter(|o| o.sometimes) {
             staging.remove_unless_written(&o.path);
         }
-        Ok(Outputs { staging })
+        Ok(Outputs {
+            staging,
+            notes: Vec::new(),
+        })
     }
 
     fn check_format(&self, o: &Planned) -> anyhow::Result<()> {

@@ -8,7 +8,7 @@
 //! turns 170–190° with a roll or bends back by 180°, and, with the data, the horse's ten
 //! poses and the ICT head's ten expressions, welded as `blend` welds them.
 
-use super::bench_scrub::read_rig;
+use super::bench_scrub::real_rigs;
 use morphkit::mesh::generate::turning_head_rig;
 use morphkit::mesh::{bbox_diagonal, ShapeSet};
 use morphkit::springs::{
@@ -100,39 +100,9 @@ pub fn run_continuity_bench(data_dir: Option<&Path>, steps: usize) -> anyhow::Re
         rows.push(rig_row(&name, &turning_head_rig(turn, roll), steps)?);
     }
     if let Some(dir) = data_dir {
-        let hc = dir.join("sumner-horse-camel");
-        let (horse, _) = read_rig(
-            &hc.join("horse-reference.obj.gz"),
-            &(1..=10)
-                .map(|i| hc.join(format!("horse-{i:02}.obj.gz")))
-                .collect::<Vec<_>>(),
-        )?;
+        let [(horse, _), (face, _)] = real_rigs(dir)?;
         rows.push(rig_row("horse (10 poses)", &horse, steps)?);
-        let ict = dir.join("ict-facekit");
-        let names = [
-            "browInnerUp_L",
-            "cheekPuff_L",
-            "eyeBlink_L",
-            "eyeBlink_R",
-            "jawLeft",
-            "jawOpen",
-            "mouthFunnel",
-            "mouthPucker",
-            "mouthSmile_L",
-            "mouthSmile_R",
-        ];
-        let (face, _) = read_rig(
-            &ict.join("generic_neutral_mesh.obj.gz"),
-            &names
-                .iter()
-                .map(|e| ict.join(format!("{e}.obj.gz")))
-                .collect::<Vec<_>>(),
-        )?;
-        rows.push(rig_row(
-            "ICT FaceKit (10 expressions), welded",
-            &face,
-            steps,
-        )?);
+        rows.push(rig_row("ICT FaceKit (10 expressions), welded", &face, steps)?);
     } else {
         println!("continuity suite: the real rigs need --data DIR or MORPHKIT_DATA (sumner-horse-camel, ict-facekit)");
     }

@@ -237,7 +237,7 @@ fn rig_row(
 /// seams welded as `morphkit blend`, the Python module and the add-on weld them: the rig a
 /// user's slider moves. (Until issue 54 the weld fused ICT's touching shells, 369 vertices,
 /// and welded eyeBlink_R's full solve snapped between 0.590 and 0.595; it welds none now.)
-pub(super) fn read_rig(
+fn read_rig(
     base: &Path,
     targets: &[std::path::PathBuf],
 ) -> anyhow::Result<(ShapeSet, usize)> {
@@ -252,8 +252,10 @@ pub(super) fn read_rig(
     Ok((weld.shapes(&shapes)?, weld.merged()))
 }
 
-/// Runs the scrub suite on the ICT and horse rigs of `data_dir`, `changes` combinations each.
-pub fn run_scrub_bench(data_dir: &Path, changes: usize) -> anyhow::Result<Value> {
+/// The horse with its ten poses and the ICT head with its ten expressions from `data_dir`,
+/// each welded as users' rigs are ([`read_rig`]): the real rigs of the scrub and continuity
+/// suites.
+pub(super) fn real_rigs(data_dir: &Path) -> anyhow::Result<[(ShapeSet, usize); 2]> {
     let ict = data_dir.join("ict-facekit");
     let expressions = [
         "browInnerUp_L",
@@ -281,6 +283,12 @@ pub fn run_scrub_bench(data_dir: &Path, changes: usize) -> anyhow::Result<Value>
             .map(|i| hc.join(format!("horse-{i:02}.obj.gz")))
             .collect::<Vec<_>>(),
     )?;
+    Ok([horse, face])
+}
+
+/// Runs the scrub suite on the ICT and horse rigs of `data_dir`, `changes` combinations each.
+pub fn run_scrub_bench(data_dir: &Path, changes: usize) -> anyhow::Result<Value> {
+    let [horse, face] = real_rigs(data_dir)?;
     Ok(json!([
         rig_row("horse (10 poses)", &horse, false, changes)?,
         rig_row("ICT FaceKit (10 expressions)", &face, true, changes)?,

@@ -61,8 +61,8 @@ do not depend on each other, so --threads, frame order and repeated runs give th
 A frame that does not converge is reported on stderr and in --report, and its failing
 vertices are written, coloured red, to OUT-unconverged.ply beside the output.
 
---rig FILE.glb blends a user's asset: its mesh (--mesh NAME when several have morph targets),
-named morph targets and weights animation (--animation NAME when several; or --weights-file,
+--rig FILE.glb blends a user's asset: its mesh (--mesh NAME|INDEX when several have morph targets),
+named morph targets and weights animation (--animation NAME|INDEX when several; or --weights-file,
 whose CSV header row names targets) drive the blend, and a .glb/.gltf OUT is the same asset
 (materials, textures, skins, other meshes, transforms, animations kept) with one more
 animation, NAME-physical, keying one new morph target per frame at the keys' times. More frames
@@ -91,16 +91,18 @@ pub struct BlendArgs {
     /// added.
     #[arg(long, value_name = "GLB", conflicts_with_all = ["base", "targets", "alpha", "weights", "frames", "convex"])]
     pub rig: Option<PathBuf>,
-    /// The weights animation of --rig to blend, by name (needed when several drive the mesh).
+    /// The weights animation of --rig to blend, by name or index in the file's animations
+    /// (needed when several drive the mesh; an index where they share a name).
     #[arg(
         long,
-        value_name = "NAME",
+        value_name = "NAME|INDEX",
         requires = "rig",
         conflicts_with = "weights_file"
     )]
     pub animation: Option<String>,
-    /// The mesh of --rig, by name (needed when several meshes have morph targets).
-    #[arg(long, value_name = "NAME", requires = "rig")]
+    /// The mesh of --rig, by name or index (needed when several meshes have morph targets;
+    /// an index where they share a name).
+    #[arg(long, value_name = "NAME|INDEX", requires = "rig")]
     pub mesh: Option<String>,
     /// The base shape (shape 0).
     #[arg(long, required_unless_present_any = ["scene", "rig"])]
@@ -504,14 +506,14 @@ pub fn run(a: &BlendArgs) -> anyhow::Result<()> {
     let failed_ply = (!unconverged.is_empty()).then(|| unconverged_path(&a.out));
     if let Some(path) = &failed_ply {
         let count = failed.iter().filter(|f| **f).count();
-        eprintln!(
+        outputs.warn_after_commit(format!(
             "warning: {} of {} frames did not converge (frames {:?}{}); {count} vertices fail, shown red in {}",
             unconverged.len(),
             weights.len(),
             &unconverged[..unconverged.len().min(10)],
             if unconverged.len() > 10 { ", …" } else { "" },
             path.display()
-        );
+        ));
         write_region(&mut outputs, path, shapes.base(), &failed)?;
     }
     if let Some(&(_, worst)) = uncertain.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {

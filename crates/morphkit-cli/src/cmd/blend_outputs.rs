@@ -52,7 +52,8 @@ pub(super) fn write_region(
 
 /// Warns about the jumps of a sequence (a part that snapped from one equilibrium to another
 /// between two frames, see `morphkit::springs::continuity`) and writes their vertices, red on
-/// the base mesh, to [`jumps_path`]. Returns that path when anything jumped.
+/// the base mesh, to [`jumps_path`]. Returns that path when anything jumped. The warning names
+/// that file, so it is printed once the outputs are in place ([`Outputs::warn_after_commit`]).
 pub(super) fn report_jumps(
     outputs: &mut Outputs,
     out: &Path,
@@ -69,7 +70,7 @@ pub(super) fn report_jumps(
         .unwrap_or(first);
     let region = continuity.jump_vertices();
     let path = jumps_path(out);
-    eprintln!(
+    outputs.warn_after_commit(format!(
         "warning: a part jumped between {} pair(s) of consecutive frames (first: frames {}→{}; worst: frames {}→{}, {} vertices moving up to {:.1}× the linear blend's step, bound {}); the spring energy has two equilibria there and the frames pass from one to the other. {} vertices shown red in {}; try --hinge-weight 1 (see the README, \"Jumps between frames\")",
         continuity.jumps.len(),
         first.frames[0],
@@ -81,7 +82,7 @@ pub(super) fn report_jumps(
         continuity.bound,
         region.len(),
         path.display()
-    );
+    ));
     let mut flagged = vec![false; base.positions.len()];
     for &v in &region {
         flagged[v as usize] = true;

@@ -35,8 +35,9 @@ pub(super) fn carries(out: &Path) -> bool {
 }
 
 /// Reads `--rig` with its weights, and its base and targets (named) as shapes (see the
-/// [module documentation](self)); refuses, before any solve, an output asset that would hold
-/// more targets than --max-targets.
+/// [module documentation](self)); refuses, before any solve, an animation whose key times are
+/// not strictly increasing, and what the output asset would refuse at the write
+/// ([`GltfAsset::check_frame_animation`]: more targets than --max-targets, no node to play it).
 pub(super) fn read(a: &BlendArgs, path: &Path) -> anyhow::Result<(Rig, ShapeSet)> {
     let opts = GltfReadOptions {
         mesh: a.mesh.clone(),
@@ -56,7 +57,7 @@ pub(super) fn read(a: &BlendArgs, path: &Path) -> anyhow::Result<(Rig, ShapeSet)
     let shapes = ShapeSet::new(m.base.clone(), named)
         .with_context(|| format!("{}: the morph targets", path.display()))?;
     let n_shapes = shapes.len();
-    let (weights, times, clip) = match &a.weights_file {
+    let (weights, times, clip): (Vec<Weights>, Vec<f64>, String) = match &a.weights_file {
         Some(f) => {
             let rows = io::read_named_weights(f, &m.target_names)?;
             if rows.len() > MAX_FRAMES {
@@ -94,6 +95,9 @@ pub(super) fn read(a: &BlendArgs, path: &Path) -> anyhow::Result<(Rig, ShapeSet)
                     m.target_names.join(", ")
                 );
             };
+            // Keys out of time order are refused here, naming the input animation, not after
+            // every frame is solved where the physical animation is made from them.
+            anim.check_times(path)?;
             let mut w = Vec::with_capacity(anim.keys.len());
             for (k, (_, keys)) in anim.keys.iter().enumerate() {
                 let x = Weights::Delta(keys.clone());
@@ -109,7 +113,7 @@ pub(super) fn read(a: &BlendArgs, path: &Path) -> anyhow::Result<(Rig, ShapeSet)
     if carries(&a.out) {
         crate::outputs::check_asset_flags(&a.out)?;
         asset.set_max_targets(crate::outputs::asset_max_targets());
-        asset.check_room(weights.len())?;
+        asset.check_frame_animation(&clip, &times, weights.len())?;
     }
     let rig = Rig {
         asset,

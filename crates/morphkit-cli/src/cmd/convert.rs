@@ -54,8 +54,9 @@ pub struct ConvertArgs {
     /// Replace the frame_*.obj files of an existing output directory.
     #[arg(long)]
     pub force: bool,
-    /// The mesh of a .glb/.gltf input to read, by name, when several have morph targets.
-    #[arg(long, value_name = "NAME")]
+    /// The mesh of a .glb/.gltf input to read, by name or index (`--mesh 1`; an index where
+    /// meshes share a name), when several have morph targets.
+    #[arg(long, value_name = "NAME|INDEX")]
     pub mesh: Option<String>,
 }
 

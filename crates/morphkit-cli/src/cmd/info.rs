@@ -24,8 +24,9 @@ pub struct InfoArgs {
     /// Print machine-readable JSON instead of text.
     #[arg(long)]
     pub json: bool,
-    /// The mesh of .glb/.gltf files to describe, by name, when several have morph targets.
-    #[arg(long, value_name = "NAME")]
+    /// The mesh of .glb/.gltf files to describe, by name or index (`--mesh 1`; an index where
+    /// meshes share a name), when several have morph targets.
+    #[arg(long, value_name = "NAME|INDEX")]
     pub mesh: Option<String>,
 }
 

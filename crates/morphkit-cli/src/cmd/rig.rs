@@ -44,11 +44,12 @@ pub struct RigArgs {
     /// output is that asset with the shapes added.
     #[arg(long, value_name = "MESH")]
     pub target: PathBuf,
-    /// The mesh of a .glb/.gltf --target, by name (needed when several have morph targets).
-    #[arg(long, value_name = "NAME")]
+    /// The mesh of a .glb/.gltf --target, by name or index (needed when several have morph
+    /// targets; an index where they share a name).
+    #[arg(long, value_name = "NAME|INDEX")]
     pub mesh: Option<String>,
-    /// The mesh of a .glb/.gltf --source-shapes, by name.
-    #[arg(long, value_name = "NAME")]
+    /// The mesh of a .glb/.gltf --source-shapes, by name or index.
+    #[arg(long, value_name = "NAME|INDEX")]
     pub source_mesh: Option<String>,
     #[command(flatten)]
     pub corr: CorrespondenceArgs,

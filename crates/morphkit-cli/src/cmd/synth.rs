@@ -95,6 +95,14 @@ pub fn run(args: &SynthArgs) -> anyhow::Result<()> {
         .output("--selection", &selection, Kind::Mesh)
         .output_opt("--report", args.report.as_ref(), Kind::Json)
         .check()?;
+    crate::outputs::check_frames_of_target(
+        &args.out,
+        &built.target_path,
+        built.target.num_vertices(),
+        s.num_frames(),
+        "synth",
+        built.fps,
+    )?;
     let mut layers = Vec::new();
     for k in 0..s.num_layers() {
         let info = s.layer_info(k);

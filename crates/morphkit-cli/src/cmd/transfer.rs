@@ -185,6 +185,16 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
             .collect();
         frames = ShapeSet::new(frames.base().clone(), scaled)?;
     }
+    // An edit of a glTF target is checked now (--max-targets, flags it does not apply), not
+    // after the correspondence and every frame's solve.
+    crate::outputs::check_frames_of_target(
+        &args.out,
+        &args.target,
+        target.num_vertices(),
+        frames.len(),
+        "transfer",
+        args.fps,
+    )?;
     let ratio = morphkit::mesh::bbox_diagonal(frames.positions(0)) / source_ref.bbox_diagonal();
     if !(0.5..=2.0).contains(&ratio) {
         eprintln!(

@@ -126,12 +126,12 @@ pub fn run(
     let jumps_ply = report_jumps(&mut outputs, &a.out, shapes.base(), &continuity)?;
     let failed_ply = (!unconverged.is_empty()).then(|| unconverged_path(&a.out));
     if let Some(path) = &failed_ply {
-        eprintln!(
+        outputs.warn_after_commit(format!(
             "warning: {} of {} frames did not converge; failing vertices in red in {}",
             unconverged.len(),
             weights.len(),
             path.display()
-        );
+        ));
         write_region(&mut outputs, path, shapes.base(), &failed)?;
     }
     let out_set = ShapeSet::new(shapes.base().clone(), frames)?;

@@ -71,7 +71,9 @@ pub fn read_named_weights(path: &Path, targets: &[String]) -> Result<Vec<WeightR
 /// order, which is the caller's to check.
 ///
 /// Errors: those of [`parse_weights`]; a header name that is no target (the error lists the
-/// targets), a name given twice, a row with another number of weights than the header names.
+/// targets) or that several targets share (a header cannot choose among them; the error
+/// names their indices and asks for rows without a header), a name given twice, a row with
+/// another number of weights than the header names.
 pub fn parse_named_weights(
     path: &Path,
     text: &str,
@@ -94,12 +96,33 @@ pub fn parse_named_weights(
     if header.iter().all(|f| f.parse::<f64>().is_ok()) {
         return Ok(rows);
     }
+    let line = 1 + text.lines().position(|l| l.trim() == first).unwrap_or(0);
     let mut columns = Vec::with_capacity(header.len());
     for (i, name) in header.iter().enumerate() {
-        let Some(t) = targets.iter().position(|t| t == name) else {
+        let named: Vec<usize> = (0..targets.len())
+            .filter(|&t| targets[t] == *name)
+            .collect();
+        if named.len() > 1 {
+            let list: Vec<String> = named.iter().map(|t| t.to_string()).collect();
             return Err(IoError::parse(
                 path,
-                1 + text.lines().position(|l| l.trim() == first).unwrap_or(0),
+                line,
+                format!(
+                    "column {} of the header is '{}', which {} morph targets share (targets {}); \
+                     a header cannot tell them apart: write the rows without a header, one \
+                     weight per target in the rig's order ({} targets)",
+                    i + 1,
+                    show(name),
+                    named.len(),
+                    list.join(", "),
+                    targets.len()
+                ),
+            ));
+        }
+        let Some(&t) = named.first() else {
+            return Err(IoError::parse(
+                path,
+                line,
                 format!(
                     "column {} of the header is '{}', which names no morph target; the targets: {}",
                     i + 1,
@@ -312,6 +335,28 @@ mod tests {
             e.contains("w.csv:2: 3 weights, but the header names 2"),
             "{e}"
         );
+    }
+
+    /// Issue 55: a header naming a target that two targets share drove only the first.
+    #[test]
+    fn a_header_naming_a_shared_target_name_is_refused() {
+        let names = ["same".to_string(), "jaw".into(), "same".into()];
+        let e = parse_named_weights(p(), "jaw,same\n0,1\n", false, &names)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("w.csv:1: column 2 of the header is 'same', which 2 morph targets share (targets 0, 2)"),
+            "{e}"
+        );
+        assert!(
+            e.contains("without a header") && e.contains("(3 targets)"),
+            "{e}"
+        );
+        // A header that names only unshared targets, and rows without a header, still work.
+        let rows = parse_named_weights(p(), "jaw\n0.5\n", false, &names).unwrap();
+        assert_eq!(rows[0].values, [0.0, 0.5, 0.0]);
+        let rows = parse_named_weights(p(), "0.1,0.2,0.3\n", false, &names).unwrap();
+        assert_eq!(rows[0].values, [0.1, 0.2, 0.3]);
     }
 
     #[test]

@@ -180,3 +180,48 @@ pub(super) fn weight_keys(
     let (times, w, cubic) = channel_data(path, doc, ch, num_targets, data)?;
     Ok(keys_of(&times, &w, cubic, num_targets))
 }
+
+/// The first key whose time is not finite or, as `f32` (what a file stores), not after the
+/// time before it; `None` when the times are finite and strictly increasing, as glTF 2.0
+/// requires of an animation sampler's input.
+pub(super) fn first_unordered_key(times: &[f64]) -> Option<usize> {
+    (0..times.len())
+        .find(|&k| !times[k].is_finite() || (k > 0 && times[k - 1] as f32 >= times[k] as f32))
+}
+
+/// A message for key `k` of `times`, found by [`first_unordered_key`].
+pub(super) fn unordered_key_message(times: &[f64], k: usize) -> String {
+    let rule = "key times must be finite and strictly increasing (as f32)";
+    if !times[k].is_finite() {
+        return format!("key {k} is at {} s: {rule}", times[k]);
+    }
+    format!(
+        "key {k} at {} s does not come after key {} at {} s: {rule}",
+        times[k] as f32,
+        k - 1,
+        times[k - 1] as f32
+    )
+}
+
+impl super::GltfWeightAnimation {
+    /// Fails when the key times are not finite and strictly increasing (as `f32`), as glTF 2.0
+    /// requires and as an animation made from these keys needs ([`super::GltfAsset::add_frame_animation`]):
+    /// a caller checks this before the work the keys drive. The error names the file `path`,
+    /// the animation and the keys.
+    pub fn check_times(&self, path: &Path) -> Result<(), IoError> {
+        let times: Vec<f64> = self.keys.iter().map(|k| k.0).collect();
+        match first_unordered_key(&times) {
+            None => Ok(()),
+            Some(k) => {
+                let name = match &self.name {
+                    Some(n) => format!("animation {} '{n}'", self.index),
+                    None => format!("animation {} (unnamed)", self.index),
+                };
+                Err(IoError::content(
+                    path,
+                    format!("{name}: {}", unordered_key_message(&times, k)),
+                ))
+            }
+        }
+    }
+}

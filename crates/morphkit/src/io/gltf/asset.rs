@@ -16,6 +16,7 @@
 
 use super::accessor;
 use super::anim::{channel_data, keys_of, weight_channels, WeightChannel};
+use super::choose::{choose, shared_names, Named};
 use super::read::{load_with, Loaded, Scan};
 use super::{GltfMorphs, GltfReadOptions, SAFE_MORPH_TARGETS};
 use crate::io::source::{read_file, read_raw};
@@ -434,16 +435,29 @@ impl GltfAsset {
         &self.animations
     }
 
-    /// The weights animation named `name`; with `None`, the only one (`None` when there is
-    /// none). Errors: no animation of that name, or several and no name (both list them).
+    /// The weights animation `name` chooses, by name or index (the rule of
+    /// [`GltfReadOptions::mesh`]: an index is the animation's in `animations`); with `None`,
+    /// the only one (`None` when there is none). Errors: no animation of that name or index,
+    /// several of that name (naming their indices), or several and no name (all list them).
     pub fn weight_animation(
         &self,
         name: Option<&str>,
     ) -> Result<Option<&GltfWeightAnimation>, IoError> {
+        let items: Vec<Named> = self
+            .animations
+            .iter()
+            .map(|a| Named {
+                index: a.index,
+                name: a.name.as_deref(),
+            })
+            .collect();
+        // Listed by name, and by index too where names are shared.
+        let shared = shared_names(&items);
         let list = || {
             self.animations
                 .iter()
                 .map(|a| match &a.name {
+                    Some(n) if shared => format!("animation {} '{n}'", a.index),
                     Some(n) => format!("'{n}'"),
                     None => format!("animation {} (unnamed)", a.index),
                 })
@@ -455,30 +469,36 @@ impl GltfAsset {
             None => format!("mesh {}", self.mesh),
         };
         match name {
-            Some(n) => match self
-                .animations
-                .iter()
-                .find(|a| a.name.as_deref() == Some(n))
-            {
-                Some(a) => Ok(Some(a)),
-                None => Err(IoError::content(
-                    &self.path,
+            Some(n) => {
+                let scope = format!(" driving the morph weights of {what}");
+                let i = choose(&self.path, "animation", &scope, &items, n, || {
                     format!(
-                        "no animation named '{n}' drives the morph weights of {what}; {}",
+                        "no animation named '{n}'{} drives the morph weights of {what}; {}",
+                        if n.parse::<usize>().is_ok() {
+                            " or of that index"
+                        } else {
+                            ""
+                        },
                         if self.animations.is_empty() {
                             "none does".to_string()
                         } else {
                             format!("these do: {}", list())
                         }
-                    ),
-                )),
-            },
+                    )
+                })?;
+                Ok(Some(&self.animations[i]))
+            }
             None if self.animations.len() > 1 => Err(IoError::content(
                 &self.path,
                 format!(
-                    "{} animations drive the morph weights of {what} ({}); choose one by name",
+                    "{} animations drive the morph weights of {what} ({}); choose one {}",
                     self.animations.len(),
-                    list()
+                    list(),
+                    if shared {
+                        "by index (names are shared)"
+                    } else {
+                        "by name or index"
+                    }
                 ),
             )),
             None => Ok(self.animations.first()),

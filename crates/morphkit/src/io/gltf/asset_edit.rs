@@ -418,6 +418,46 @@ impl GltfAsset {
         }
     }
 
+    /// Fails when [`GltfAsset::add_frame_animation`] would refuse an animation `clip_name` of
+    /// `frames` frames at `times`, for what it refuses before the positions: no frame, times and
+    /// frames of different counts, times not finite or not strictly increasing as `f32`, no
+    /// node using the mesh, more morph targets than [`GltfAsset::max_targets`] (a split rig).
+    /// A command calls it before it makes the frames, so that these errors come before the
+    /// work.
+    pub fn check_frame_animation(
+        &self,
+        clip_name: &str,
+        times: &[f64],
+        frames: usize,
+    ) -> Result<(), IoError> {
+        let bad = |m: String| IoError::content(&self.path, format!("animation '{clip_name}': {m}"));
+        if frames == 0 {
+            return Err(bad("no frames to animate (the frames are empty)".into()));
+        }
+        if times.len() != frames {
+            return Err(bad(format!("{} times for {frames} frames", times.len())));
+        }
+        if let Some(k) = super::anim::first_unordered_key(times) {
+            return Err(bad(super::anim::unordered_key_message(times, k)));
+        }
+        if times[0] < 0.0 {
+            return Err(bad(format!(
+                "key time 0 is {} s; glTF key times must not be negative",
+                times[0]
+            )));
+        }
+        if self.mesh_nodes().is_empty() {
+            return Err(bad("no node uses the mesh, so nothing would play it".into()));
+        }
+        let fresh = (0..frames)
+            .filter(|k| {
+                let name = format!("{clip_name}_{k:04}");
+                !self.morphs.target_names.contains(&name)
+            })
+            .count();
+        self.check_room(fresh)
+    }
+
     /// Adds a physical animation: one new morph target per frame (`frames[k]`, `#V` absolute
     /// positions, named `CLIP_0000`, …) and an animation `clip_name` that keys them one at a
     /// time — key `k` at `times[k]` seconds has weight 1 on frame `k`'s target and 0 on every
@@ -435,35 +475,8 @@ impl GltfAsset {
         times: &[f64],
         frames: &[Vec<Point>],
     ) -> Result<(), IoError> {
-        let bad = |m: String| IoError::content(&self.path, format!("animation '{clip_name}': {m}"));
-        if frames.is_empty() {
-            return Err(bad("no frames to animate (the frames are empty)".into()));
-        }
-        if times.len() != frames.len() {
-            return Err(bad(format!(
-                "{} times for {} frames",
-                times.len(),
-                frames.len()
-            )));
-        }
-        let ok_times = times.iter().all(|t| t.is_finite())
-            && times.windows(2).all(|w| (w[0] as f32) < (w[1] as f32));
-        if !ok_times {
-            return Err(bad(
-                "key times must be finite and strictly increasing (as f32)".into(),
-            ));
-        }
-        if times[0] < 0.0 {
-            return Err(bad(format!(
-                "key time 0 is {} s; glTF key times must not be negative",
-                times[0]
-            )));
-        }
+        self.check_frame_animation(clip_name, times, frames.len())?;
         let nodes = self.mesh_nodes();
-        if nodes.is_empty() {
-            return Err(bad("no node uses the mesh, so nothing would play it".into()));
-        }
-        self.check_room(0)?;
         let names: Vec<String> = (0..frames.len())
             .map(|k| format!("{clip_name}_{k:04}"))
             .collect();

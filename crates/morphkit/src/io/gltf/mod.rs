@@ -85,6 +85,7 @@ mod asset_edit;
 mod asset_write;
 mod budget;
 mod buffers;
+mod choose;
 mod extensions;
 mod normals;
 mod precheck;

@@ -3,6 +3,7 @@
 use super::accessor::{self, Data};
 use super::anim::{target_names, weight_keys};
 use super::buffers::load_buffers;
+use super::choose::{choose, shared_names, Named};
 use super::{extensions, GltfMorphs};
 use crate::io::Format;
 use crate::io::{source::read_file, IoError};
@@ -85,8 +86,11 @@ fn check_glb(path: &Path, b: &[u8]) -> Result<(), IoError> {
 /// How [`parse_gltf_morphs_with`] reads a file.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct GltfReadOptions {
-    /// The name of the mesh to read. `None` (default): the mesh with morph targets (an error
-    /// listing the names when several meshes have them), or the first mesh when none has.
+    /// The mesh to read, by name or by index: the mesh of that name when exactly one has it
+    /// (an error naming their indices when several share it); else, when the key is a number,
+    /// the mesh at that index in `meshes` (`"1"`), so a mesh whose name is shared, or that has
+    /// none, can be chosen. `None` (default): the mesh with morph targets (an error listing
+    /// them when several meshes have them), or the first mesh when none has.
     pub mesh: Option<String>,
 }
 
@@ -329,7 +333,8 @@ pub(super) fn mesh_label(m: &::gltf::Mesh) -> String {
     }
 }
 
-/// The mesh to read: the one named in `opts`, else the one with morph targets, else the first.
+/// The mesh to read: the one `opts` chooses by name or index ([`super::choose`]), else the one
+/// with morph targets, else the first.
 fn choose_mesh<'a>(
     path: &Path,
     doc: &'a ::gltf::Document,
@@ -341,16 +346,27 @@ fn choose_mesh<'a>(
             .collect::<Vec<_>>()
             .join(", ")
     };
-    if let Some(name) = &opts.mesh {
-        return doc
-            .meshes()
-            .find(|m| m.name() == Some(name.as_str()))
-            .ok_or_else(|| {
-                IoError::content(
-                    path,
-                    format!("the file has no mesh named '{name}'; its meshes: {}", all()),
-                )
-            });
+    if let Some(key) = &opts.mesh {
+        let meshes: Vec<_> = doc.meshes().collect();
+        let items: Vec<Named> = meshes
+            .iter()
+            .map(|m| Named {
+                index: m.index(),
+                name: m.name(),
+            })
+            .collect();
+        let i = choose(path, "mesh", "", &items, key, || {
+            let index = if key.parse::<usize>().is_ok() {
+                " or index"
+            } else {
+                ""
+            };
+            format!(
+                "the file has no mesh named '{key}'{index}; its meshes: {}",
+                all()
+            )
+        })?;
+        return Ok(meshes[i].clone());
     }
     let morph: Vec<_> = doc
         .meshes()
@@ -368,13 +384,28 @@ fn choose_mesh<'a>(
             .ok_or_else(|| IoError::content(path, "the file has no mesh")),
         1 => Ok(morph[0].clone()),
         _ if split => Ok(morph[0].clone()),
-        n => Err(IoError::content(
-            path,
-            format!(
-                "{n} meshes have morph targets ({}); choose one by name (GltfReadOptions::mesh)",
-                morph.iter().map(mesh_label).collect::<Vec<_>>().join(", ")
-            ),
-        )),
+        n => {
+            let items: Vec<Named> = morph
+                .iter()
+                .map(|m| Named {
+                    index: m.index(),
+                    name: m.name(),
+                })
+                .collect();
+            let how = if shared_names(&items) {
+                "by index (names are shared)"
+            } else {
+                "by name or index"
+            };
+            Err(IoError::content(
+                path,
+                format!(
+                    "{n} meshes have morph targets ({}); choose one {how} (GltfReadOptions::mesh, \
+                     the command line's --mesh)",
+                    morph.iter().map(mesh_label).collect::<Vec<_>>().join(", ")
+                ),
+            ))
+        }
     }
 }
 
