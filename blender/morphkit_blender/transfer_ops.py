@@ -11,7 +11,9 @@ the same name.
 Two options of the panel are the CLI's flags: *Refine correspondence* (`--refine`, closest-point
 refinement after the marker warp; used by both transfers) and *Local stretch* (`transfer
 --local-stretch --area-weighted`, with the fold guard; animation transfer only), which together
-are the configuration the README measures best on horse -> camel and cat -> dog.
+are the configuration the README measures best on horse -> camel and cat -> dog. Both default
+to the library's defaults (`morphkit.transfer_defaults()`, issue 55), so a new scene transfers
+as `morphkit transfer` and the module do without options.
 """
 
 import json
@@ -204,7 +206,19 @@ class MORPHKIT_PT_transfer(bpy.types.Panel):
 classes = (MORPHKIT_OT_add_marker, MORPHKIT_OT_transfer, MORPHKIT_OT_transfer_rig, MORPHKIT_PT_transfer)
 
 
+def _library_defaults():
+    """The library's transfer defaults (`morphkit.transfer_defaults()`), or an empty dict when
+    the module is not found (the operators cannot run then anyway)."""
+    try:
+        import morphkit
+
+        return morphkit.transfer_defaults()
+    except (ImportError, AttributeError):
+        return {}
+
+
 def register():
+    defaults = _library_defaults()
     bpy.types.Scene.morphkit_source = bpy.props.PointerProperty(name="Source", type=bpy.types.Object)
     bpy.types.Scene.morphkit_target = bpy.props.PointerProperty(name="Target", type=bpy.types.Object)
     bpy.types.Scene.morphkit_markers = bpy.props.StringProperty(
@@ -213,7 +227,7 @@ def register():
     bpy.types.Scene.morphkit_refine = bpy.props.BoolProperty(
         name="Refine correspondence",
         description="Refine the marker correspondence by closest points (morphkit correspond --refine)",
-        default=False,
+        default=bool(defaults.get("refine", False)),
     )
     bpy.types.Scene.morphkit_local_stretch = bpy.props.BoolProperty(
         name="Local stretch",
@@ -221,7 +235,7 @@ def register():
             "Transfer each matched gradient as a stretch in the target triangle's own frame, "
             "area-weighted and guarded against creases (transfer --local-stretch --area-weighted)"
         ),
-        default=False,
+        default=bool(defaults.get("local_stretch", False) and defaults.get("area_weighted", False)),
     )
     for c in classes:
         bpy.utils.register_class(c)

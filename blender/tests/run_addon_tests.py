@@ -390,19 +390,25 @@ err = max(
 ) / diag(DT)
 check(err < 1e-6, f"rig keys differ by {err}")
 results["rig_error"] = err
-# The panel's refine and local-stretch options reach the module as its keyword arguments.
-scene.morphkit_refine = scene.morphkit_local_stretch = True
-check(bpy.ops.morphkit.transfer() == {"FINISHED"}, "transfer with refine and local stretch failed")
+# The panel's options default to the library's (as the module's keywords and the CLI's flags)
+# and reach the module as its keyword arguments: off, the configuration before issue 40.
+defaults = morphkit.transfer_defaults()
+check(scene.morphkit_refine == defaults["refine"], "the panel's refine default is not the library's")
+check(scene.morphkit_local_stretch == (defaults["local_stretch"] and defaults["area_weighted"]),
+      "the panel's local-stretch default is not the library's")
+scene.morphkit_refine = scene.morphkit_local_stretch = False
+check(bpy.ops.morphkit.transfer() == {"FINISHED"}, "transfer without refine and local stretch failed")
 keys = [k for k in dog.data.shape_keys.key_blocks if k.name.startswith(transfer_ops.FRAME_PREFIX)]
-corr_r = morphkit.Correspondence.from_markers(CS, CFb, DT, DFb, pairs, refine=True)
+corr_r = morphkit.Correspondence.from_markers(CS, CFb, DT, DFb, pairs, refine=False)
 ref_r = morphkit.Transfer(
-    CS, CFb, DT, DFb, corr_r, local_stretch=True, area_weighted=True
+    CS, CFb, DT, DFb, corr_r, local_stretch=False, area_weighted=False
 ).transfer_many(run)
 check(float(np.abs(ref_r - ref).max()) / diag(DT) > 1e-4, "the options changed nothing")
 err = max(float(np.abs(geometry.key_coords(k) - r).max()) for k, r in zip(keys, ref_r)) / diag(DT)
-check(len(keys) == 4 and err < 1e-6, f"refined local-stretch frames differ by {err}")
+check(len(keys) == 4 and err < 1e-6, f"plain world-frame frames differ by {err}")
 results["transfer_local_stretch_error"] = err
-scene.morphkit_refine = scene.morphkit_local_stretch = False
+scene.property_unset("morphkit_refine")
+scene.property_unset("morphkit_local_stretch")
 bpy.data.objects.remove(cat)
 bpy.data.objects.remove(dog)
 

@@ -138,7 +138,7 @@ class Correspondence:
         ft: ArrayLike,
         markers: Union[PathLike, Sequence[Sequence[int]], ArrayLike],
         *,
-        refine: bool = False,
+        refine: Optional[bool] = None,  # None: the library's default (refined)
         weld: bool = True,  # split seam vertices are one vertex while warping
     ) -> "Correspondence": ...
     @staticmethod
@@ -153,6 +153,8 @@ class Correspondence:
     @property
     def normal_violations(self) -> List[int]: ...
     @property
+    def refined(self) -> bool: ...
+    @property
     def warped(self) -> Optional[Tuple[Vertices, Vertices]]: ...
 
 class Transfer:
@@ -164,13 +166,17 @@ class Transfer:
         ft: ArrayLike,
         correspondence: Correspondence,
         *,
-        combine: str = "inverse-distance",
-        translation: str = "follow",
-        local_stretch: bool = False,
-        area_weighted: bool = False,
-        fold_guard: bool = True,
+        # None: the library's default, as `morphkit transfer` without flags
+        # (transfer_defaults()).
+        combine: Optional[str] = None,  # "inverse-distance" | "mean" | "nearest"
+        translation: Optional[str] = None,  # "follow" | "fixed"
+        local_stretch: Optional[bool] = None,
+        area_weighted: Optional[bool] = None,
+        fold_guard: Optional[bool] = None,
         weld: bool = True,  # the target's split seam vertices are one vertex for the solve
     ) -> None: ...
+    @property
+    def options(self) -> Dict[str, Any]: ...
     def transfer(self, frame: ArrayLike) -> Vertices: ...
     def transfer_many(self, frames: Union[ArrayLike, Sequence[ArrayLike]]) -> Frames: ...
 
@@ -179,6 +185,7 @@ def geodesic_distance(
     v: ArrayLike, f: ArrayLike, sources: Union[Sequence[int], ArrayLike]
 ) -> npt.NDArray[np.float64]: ...
 def synthesize(recipe: PathLike) -> Tuple[Frames, Faces]: ...
+def transfer_defaults() -> Dict[str, Any]: ...
 
 class Partitions:
     def __init__(
@@ -262,7 +269,7 @@ class RigTransfer:
         ft: ArrayLike,
         correspondence: Correspondence,
         *,
-        combine: str = "inverse-distance",
+        combine: Optional[str] = None,  # None: the library's default
         weld: bool = True,  # the target's split seam vertices are one vertex for the solve
     ) -> None: ...
     def transfer(self, shape: ArrayLike) -> Vertices: ...

@@ -17,6 +17,7 @@ mod rig_io;
 mod scene;
 mod synth;
 mod transfer;
+mod transfer_options;
 mod weld;
 
 use pyo3::prelude::*;
@@ -37,6 +38,7 @@ fn _morphkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(synth::flexibility, m)?)?;
     m.add_function(wrap_pyfunction!(synth::geodesic_distance, m)?)?;
     m.add_function(wrap_pyfunction!(synth::synthesize, m)?)?;
+    m.add_function(wrap_pyfunction!(transfer_options::transfer_defaults, m)?)?;
     m.add_class::<synth::PyPartitions>()?;
     m.add_class::<blend::PyPhysicalBlend>()?;
     m.add_class::<blend::PyPredictor>()?;

@@ -7,13 +7,14 @@ use crate::arrays::{self, to_array, to_array3};
 use crate::dict::to_dict;
 use crate::errors::{new_err, IntoPyResult, Kind};
 use crate::mesh::from_arrays;
+use crate::transfer_options::{
+    combine_of, correspondence_options, transfer_dict, TransferKeywords,
+};
 use crate::weld::{mesh_weld, unweld, welded_target_corr};
 use morphkit::mesh::{TriMesh, Weld};
 use morphkit::transfer::rig::{RigOptions, RigTransfer};
 use morphkit::transfer::{
-    correspond, match_confidence, AnimationTransfer, Correspondence, CorrespondenceOptions,
-    GradientCombine, GradientFrame, Markers, RefineOptions, TransferOptions, TranslationMode,
-    TriangleWeighting,
+    correspond, match_confidence, AnimationTransfer, Correspondence, Markers, TransferOptions,
 };
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;
@@ -62,15 +63,16 @@ fn markers_of(obj: &Bound<'_, PyAny>, source: Elements, target: Elements) -> PyR
 impl PyCorrespondence {
     /// Computes the correspondence of source `(VS, FS)` and target `(VT, FT)` from marker
     /// pairs (a sequence of `(source_vertex, target_vertex)`, 0-based, or the path of a
-    /// `{"pairs": [[s, t], …]}` JSON file), by least-squares-mesh warps (Wang & Lee Sec. 4.1).
-    /// `refine=True` then refines it by closest points (Sumner & Popović 2004, Sec. 5), as
-    /// `morphkit correspond --refine`.
-    #[staticmethod]
+    /// `{"pairs": [[s, t], …]}` JSON file), by least-squares-mesh warps (Wang & Lee Sec. 4.1),
+    /// then refined by closest points (Sumner & Popović 2004, Sec. 5) unless `refine=False`
+    /// (`morphkit correspond --no-refine`). `refine=None` (default) is the library's default,
+    /// as the CLI's (`morphkit.transfer_defaults()["refine"]`).
     ///
     /// `weld` (default True): vertices split at seams and hard edges are one vertex while the
     /// meshes are warped (as `morphkit correspond`); the correspondence and `warped` are of
     /// the meshes as given.
-    #[pyo3(signature = (vs, fs, vt, ft, markers, *, refine=false, weld=true))]
+    #[staticmethod]
+    #[pyo3(signature = (vs, fs, vt, ft, markers, *, refine=None, weld=true))]
     #[allow(clippy::too_many_arguments)]
     fn from_markers(
         py: Python<'_>,
@@ -79,7 +81,7 @@ impl PyCorrespondence {
         vt: &Bound<'_, PyAny>,
         ft: &Bound<'_, PyAny>,
         markers: &Bound<'_, PyAny>,
-        refine: bool,
+        refine: Option<bool>,
         weld: bool,
     ) -> PyResult<Self> {
         let source = from_arrays("source", vs, fs)?;
@@ -107,18 +109,9 @@ impl PyCorrespondence {
             sw.as_ref().map_or(source.clone(), |w| w.mesh(&source)),
             tw.as_ref().map_or(target.clone(), |w| w.mesh(&target)),
         );
+        let opts = correspondence_options(refine);
         let mut r = py
-            .detach(|| {
-                correspond(
-                    &source,
-                    &target,
-                    &markers,
-                    &CorrespondenceOptions {
-                        refine: refine.then(RefineOptions::default),
-                        ..Default::default()
-                    },
-                )
-            })
+            .detach(|| correspond(&source, &target, &markers, &opts))
             .py(Kind::Transfer)?;
         if sw.is_some() || tw.is_some() {
             // Back to the meshes as given: counts, markers as given, warped vertices scattered.
@@ -197,7 +190,9 @@ impl PyCorrespondence {
     /// (`transfer::match_confidence`, as `morphkit correspond` reports it): 1 where the
     /// matches face as the triangle does, towards 0 where they face away (below 0.5: about 65°
     /// or more; places that need markers). `(n_target_triangles,)` float64.
-    #[pyo3(signature = (vs, fs, vt, ft, combine = "inverse-distance"))]
+    ///
+    /// `combine` as `Transfer`'s (`None`: the library's default).
+    #[pyo3(signature = (vs, fs, vt, ft, combine = None))]
     fn match_confidence<'py>(
         &self,
         py: Python<'py>,
@@ -205,7 +200,7 @@ impl PyCorrespondence {
         fs: &Bound<'py, PyAny>,
         vt: &Bound<'py, PyAny>,
         ft: &Bound<'py, PyAny>,
-        combine: &str,
+        combine: Option<&str>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let combine = combine_of(combine)?;
         let c = &self.inner;
@@ -213,6 +208,12 @@ impl PyCorrespondence {
             match_confidence(s, t, c, combine)
         })?;
         Ok(numpy::ndarray::Array1::from(v).into_pyarray(py))
+    }
+
+    /// Whether the closest-point refinement made this correspondence.
+    #[getter]
+    fn refined(&self) -> bool {
+        !self.inner.refinement.is_empty()
     }
 
     /// The warped source and target vertices `(WS, WT)` of :meth:`from_markers`, or `None`.
@@ -238,20 +239,25 @@ impl PyCorrespondence {
 /// A deformation transfer from a source reference `(VS, FS)` onto a target `(VT, FT)`, set up
 /// once (the target's normal equations are factored), then :meth:`transfer` per frame.
 ///
-/// `combine`: `"inverse-distance"` (default, as the CLI), `"mean"` or `"nearest"`, how several
-/// matched source gradients combine. `translation`: `"follow"` (default; the target's marker centroid follows the
-/// source's, scaled by the size ratio) or `"fixed"` (the paper's convention).
-/// `local_stretch=True` transfers each matched gradient as a stretch in the target
-/// triangle's own frame (`transfer --local-stretch`), guarded against creases unless
-/// `fold_guard=False` (`--no-fold-guard`); `area_weighted=True` weights each triangle's
-/// term by its area (`--area-weighted`). With a refined correspondence the three together
-/// are the configuration the README measures best.
+/// Every keyword left at `None` is the library's default, the same as `morphkit transfer`'s
+/// without flags (`morphkit.transfer_defaults()`; issue 55): the local-stretch frame,
+/// area weights, the fold guard, inverse-distance weights and the following translation.
+/// `combine`: `"inverse-distance"`, `"mean"` or `"nearest"`, how several matched source
+/// gradients combine (`--combine`). `translation`: `"follow"` (the target's marker centroid
+/// follows the source's, scaled by the size ratio) or `"fixed"` (the paper's convention,
+/// `--fixed-vertex`). `local_stretch=False` carries matched gradients unchanged in world
+/// coordinates (`--world-frame`); `area_weighted=False` weights triangles uniformly
+/// (`--uniform-weights`); `fold_guard=False` turns the crease guard of the local-stretch
+/// frame off (`--no-fold-guard`). `local_stretch=False, area_weighted=False` with an
+/// unrefined correspondence is the configuration before issue 40.
 ///
 /// >>> t = morphkit.Transfer(VS, FS, VT, FT, c)
 /// >>> frames_t = t.transfer_many(frames_s)
 #[pyclass(name = "Transfer", module = "morphkit", frozen)]
 pub struct PyTransfer {
     inner: AnimationTransfer,
+    /// The options it was built with.
+    options: TransferOptions,
     source_vertices: usize,
     target_vertices: usize,
     /// The target's weld (`None`: nothing welded).
@@ -295,26 +301,11 @@ fn build<T: Send, E: std::error::Error + Send>(
     Ok((inner, source.num_vertices(), target.num_vertices()))
 }
 
-fn combine_of(name: &str) -> PyResult<GradientCombine> {
-    match name {
-        "inverse-distance" => Ok(GradientCombine::InverseDistance),
-        "mean" => Ok(GradientCombine::Mean),
-        "nearest" => Ok(GradientCombine::Nearest),
-        other => Err(new_err(
-            Kind::Transfer,
-            format!(
-                "combine: expected \"inverse-distance\", \"mean\" or \"nearest\", got {other:?}"
-            ),
-        )),
-    }
-}
-
 #[pymethods]
 impl PyTransfer {
     #[new]
-    #[pyo3(signature = (vs, fs, vt, ft, correspondence, *, combine="inverse-distance",
-        translation="follow", local_stretch=false, area_weighted=false, fold_guard=true,
-        weld=true))]
+    #[pyo3(signature = (vs, fs, vt, ft, correspondence, *, combine=None, translation=None,
+        local_stretch=None, area_weighted=None, fold_guard=None, weld=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -323,51 +314,21 @@ impl PyTransfer {
         vt: &Bound<'_, PyAny>,
         ft: &Bound<'_, PyAny>,
         correspondence: &PyCorrespondence,
-        combine: &str,
-        translation: &str,
-        local_stretch: bool,
-        area_weighted: bool,
-        fold_guard: bool,
+        combine: Option<&str>,
+        translation: Option<&str>,
+        local_stretch: Option<bool>,
+        area_weighted: Option<bool>,
+        fold_guard: Option<bool>,
         weld: bool,
     ) -> PyResult<Self> {
-        if !fold_guard && !local_stretch {
-            return Err(new_err(
-                Kind::Transfer,
-                "fold_guard=False: the fold guard belongs to local_stretch=True (the plain \
-                 transfer has none to turn off)",
-            ));
-        }
-        let combine = combine_of(combine)?;
-        let translation = match translation {
-            "follow" => TranslationMode::FollowMarkers,
-            "fixed" => TranslationMode::FixedVertex,
-            other => {
-                return Err(new_err(
-                    Kind::Transfer,
-                    format!("translation: expected \"follow\" or \"fixed\", got {other:?}"),
-                ))
-            }
-        };
-        let mut opts = TransferOptions {
+        let opts = TransferKeywords {
             combine,
             translation,
-            ..TransferOptions::default()
-        };
-        // Both set either way: the library's defaults became local stretch and area weights in
-        // issue 40; these keyword defaults are unchanged.
-        opts.frame = if local_stretch {
-            GradientFrame::LocalStretch
-        } else {
-            GradientFrame::World
-        };
-        opts.solver.weighting = if area_weighted {
-            TriangleWeighting::Area
-        } else {
-            TriangleWeighting::Uniform
-        };
-        if !fold_guard {
-            opts.fold_guard = None;
+            local_stretch,
+            area_weighted,
+            fold_guard,
         }
+        .options()?;
         let (inner, source_vertices, target_vertices, weld) = build_welded(
             py,
             [vs, fs, vt, ft],
@@ -377,10 +338,18 @@ impl PyTransfer {
         )?;
         Ok(Self {
             inner,
+            options: opts,
             source_vertices,
             target_vertices,
             weld,
         })
+    }
+
+    /// The options in use, as the keyword values that ask for them (the keys of
+    /// `morphkit.transfer_defaults()` but `refine`).
+    #[getter]
+    fn options<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        transfer_dict(py, &self.options)
     }
 
     /// One source frame `(n_s, 3)` (same connectivity as the source reference) onto the
@@ -450,7 +419,7 @@ pub struct PyRigTransfer {
 #[pymethods]
 impl PyRigTransfer {
     #[new]
-    #[pyo3(signature = (vs, fs, vt, ft, correspondence, *, combine="inverse-distance", weld=true))]
+    #[pyo3(signature = (vs, fs, vt, ft, correspondence, *, combine=None, weld=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -459,15 +428,12 @@ impl PyRigTransfer {
         vt: &Bound<'_, PyAny>,
         ft: &Bound<'_, PyAny>,
         correspondence: &PyCorrespondence,
-        combine: &str,
+        combine: Option<&str>,
         weld: bool,
     ) -> PyResult<Self> {
-        let opts = RigOptions {
-            transfer: TransferOptions {
-                combine: combine_of(combine)?,
-                ..TransferOptions::default()
-            },
-        };
+        // The rig's own defaults, as `morphkit rig`'s.
+        let mut opts = RigOptions::default();
+        opts.transfer.combine = combine_of(combine)?;
         let (inner, source_vertices, target_vertices, weld) = build_welded(
             py,
             [vs, fs, vt, ft],

@@ -36,6 +36,58 @@ def addon_zip(tmp_path, *tools):
     return build_addon.build(tmp_path / "morphkit_blender.zip", module_root)
 
 
+FAKE_BPY = """
+import types as _t
+context = _t.SimpleNamespace(preferences=_t.SimpleNamespace(addons={}))
+types = _t.SimpleNamespace(AddonPreferences=object)
+props = _t.SimpleNamespace(StringProperty=lambda **k: None)
+path = _t.SimpleNamespace(abspath=lambda p: p)
+"""
+
+FIND = """
+import sys
+if sys.argv[1] == "imported":
+    import morphkit  # the installed copy, imported before the add-on
+    assert "vendor" not in morphkit.__file__, morphkit.__file__
+import morphkit_blender
+assert morphkit_blender._find_module()
+import morphkit
+print(morphkit.__file__)
+morphkit.transfer_defaults()  # the vendored extension works
+"""
+
+
+def test_addon_imports_its_vendored_module(tmp_path):
+    """Issue 55: the add-on imports the module it ships even where another copy is installed
+    (this environment's, on PYTHONPATH) or already imported; no Blender needed (a stand-in
+    `bpy`)."""
+    import zipfile
+
+    sys.path.insert(0, str(ROOT / "blender"))
+    import build_addon
+
+    module_root = pathlib.Path(morphkit.__file__).resolve().parents[1]
+    addon = build_addon.build(tmp_path / "morphkit_blender.zip", module_root)
+    with zipfile.ZipFile(addon) as z:
+        z.extractall(tmp_path / "addons")
+    (tmp_path / "fake").mkdir()
+    (tmp_path / "fake" / "bpy.py").write_text(FAKE_BPY)
+    env = dict(os.environ)
+    env.pop("MORPHKIT_PYTHONPATH", None)
+    env["PYTHONPATH"] = os.pathsep.join(
+        [str(module_root), str(tmp_path / "fake"), str(tmp_path / "addons")]
+    )
+    vendor = (tmp_path / "addons" / "morphkit_blender" / "vendor" / "morphkit").resolve()
+    for case in ("imported", "installed"):
+        r = subprocess.run(
+            [sys.executable, "-c", FIND, case], capture_output=True, text=True, env=env,
+            cwd=tmp_path, timeout=120,
+        )
+        assert r.returncode == 0, r.stdout + r.stderr
+        used = pathlib.Path(r.stdout.strip().splitlines()[-1]).resolve()
+        assert used.parent == vendor, (case, used)
+
+
 def test_addon_headless(tmp_path, data):
     addon = addon_zip(tmp_path, "blender")
     exe = shutil.which("blender")

@@ -100,18 +100,45 @@ def cli_transfer(cli, d, out, *flags):
     return morphkit.read_animation(out)[0]
 
 
+def test_keyword_defaults_are_the_library_defaults():
+    """Every keyword left out is the library's default (issue 55), which the CLI uses too."""
+    d = morphkit.transfer_defaults()
+    assert set(d) == {"refine", "combine", "translation", "local_stretch", "area_weighted", "fold_guard"}
+    # The defaults of issue 40 (docs/choices.md, "Transfer defaults").
+    assert d["refine"] and d["local_stretch"] and d["area_weighted"] and d["fold_guard"]
+    assert (d["combine"], d["translation"]) == ("inverse-distance", "follow")
+    V, F = tube(8, 8)
+    c = morphkit.Correspondence.identity(V, F)
+    t = morphkit.Transfer(V, F, V, F, c)
+    assert t.options == {k: v for k, v in d.items() if k != "refine"}
+    old = morphkit.Transfer(V, F, V, F, c, local_stretch=False, area_weighted=False, combine="mean",
+                            translation="fixed")
+    assert old.options == dict(t.options, local_stretch=False, area_weighted=False, combine="mean",
+                               translation="fixed")
+    markers = [[k, k] for k in range(0, len(V), 7)]
+    assert morphkit.Correspondence.from_markers(V, F, V, F, markers).refined == d["refine"]
+    assert not morphkit.Correspondence.from_markers(V, F, V, F, markers, refine=False).refined
+
+
 def test_cat_dog_equals_the_cli(tmp_path, cli, cat_dog):
-    """The module's keyword defaults are the plain configuration: the CLI's with its
-    opt-out flags (the CLI's own defaults are the refined, local-stretch, area-weighted one,
-    tested below)."""
+    """The module's keyword defaults are the CLI's defaults (issue 55: one answer per entry
+    point), and the old configuration is the CLI's with its opt-out flags."""
     VS, FS, VT, FT, frames = cat_dog_inputs(cat_dog)
-    c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, cat_dog / "markers-cat-dog.json")
-    assert len(c.marker_residuals) == 41
+    markers = cat_dog / "markers-cat-dog.json"
+    c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, markers)
+    assert len(c.marker_residuals) == 41 and c.refined
     ours = morphkit.Transfer(VS, FS, VT, FT, c).transfer_many(frames[:4])
-    theirs = cli_transfer(
-        cli, cat_dog, tmp_path / "dog", "--no-refine", "--world-frame", "--uniform-weights"
-    )
+    theirs = cli_transfer(cli, cat_dog, tmp_path / "dog")
     assert np.abs(ours - theirs[:4]).max() <= 1e-9 * diag(VT)
+    plain_c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, markers, refine=False)
+    plain = morphkit.Transfer(
+        VS, FS, VT, FT, plain_c, local_stretch=False, area_weighted=False
+    ).transfer_many(frames[:4])
+    theirs = cli_transfer(
+        cli, cat_dog, tmp_path / "dog-plain", "--no-refine", "--world-frame", "--uniform-weights"
+    )
+    assert np.abs(plain - theirs[:4]).max() <= 1e-9 * diag(VT)
+    assert np.abs(plain - ours).max() > 1e-4 * diag(VT)
 
 
 def test_local_stretch_self_transfer_is_exact_and_the_guard_needs_it():
@@ -124,19 +151,21 @@ def test_local_stretch_self_transfer_is_exact_and_the_guard_needs_it():
         )
         assert np.abs(t.transfer_many(frames) - frames).max() < 1e-8 * diag(V)
     with pytest.raises(morphkit.TransferError, match="fold_guard"):
-        morphkit.Transfer(V, F, V, F, c, fold_guard=False)
+        morphkit.Transfer(V, F, V, F, c, local_stretch=False, fold_guard=False)
 
 
 def test_cat_dog_best_configuration_equals_the_cli(tmp_path, cli, cat_dog):
     """refine, local_stretch and area_weighted reach the library as the CLI's flags do."""
     VS, FS, VT, FT, frames = cat_dog_inputs(cat_dog)
     markers = cat_dog / "markers-cat-dog.json"
-    plain_c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, markers)
+    plain_c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, markers, refine=False)
     c = morphkit.Correspondence.from_markers(VS, FS, VT, FT, markers, refine=True)
     assert c.matches != plain_c.matches
     t = morphkit.Transfer(VS, FS, VT, FT, c, local_stretch=True, area_weighted=True)
     ours = t.transfer_many(frames[:3])
-    plain = morphkit.Transfer(VS, FS, VT, FT, plain_c).transfer_many(frames[:3])
+    plain = morphkit.Transfer(
+        VS, FS, VT, FT, plain_c, local_stretch=False, area_weighted=False
+    ).transfer_many(frames[:3])
     assert np.abs(ours - plain).max() > 1e-4 * diag(VT)
     flags = ("--refine", "--local-stretch", "--area-weighted")
     theirs = cli_transfer(cli, cat_dog, tmp_path / "dog", *flags)

@@ -13,7 +13,7 @@
 mod common;
 
 use morphkit::io::read_mesh;
-use morphkit::mesh::{Point, Topology, TriMesh};
+use morphkit::mesh::{Point, Topology, TriMesh, Weld};
 use morphkit::synth::RecipeFile;
 use morphkit::transfer::{
     correspond, AnimationTransfer, CorrespondenceOptions, GradientOperator, Markers,
@@ -22,15 +22,11 @@ use morphkit::transfer::{
 use nalgebra::{Matrix3, Vector3};
 use std::path::{Path, PathBuf};
 
-/// The plain transfer a synthesis with one whole-target layer reproduces: gradients carried in
-/// the world frame, uniform weights (the synthesizer's solve; issue 40 changed the plain
-/// transfer's defaults to the local-stretch frame and area weights, not the synthesis).
+/// The plain transfer a synthesis with one whole-target layer reproduces: the library's
+/// defaults, as `morphkit transfer`'s (issue 55; before it, the synthesis kept the world frame
+/// and uniform weights of before issue 40).
 fn synth_like() -> TransferOptions {
-    TransferOptions {
-        solver: morphkit::transfer::SolverOptions::default(),
-        frame: morphkit::transfer::GradientFrame::World,
-        ..Default::default()
-    }
+    TransferOptions::default()
 }
 
 /// Adjacency steps between a compared triangle and the nearest blended one.
@@ -284,6 +280,95 @@ fn camel_gallops_with_the_horse_legs_and_poses_with_the_horse_head() {
     let _ = std::fs::remove_dir_all(&work);
 }
 
+/// A recipe of one layer scribbled over the whole `target`, driven by `frames` of `source`
+/// (scaled by `scale`), against a plain transfer of the same frames with the library's
+/// defaults (`morphkit transfer` without flags): equal within 1e-9 of the target's diagonal on
+/// every frame.
+fn whole_target_is_plain_transfer(
+    name: &str,
+    (source, target, markers): (&Path, &Path, &Path),
+    frames: &[PathBuf],
+    scale: f64,
+) {
+    for p in [source, target, markers]
+        .into_iter()
+        .chain(frames.iter().map(PathBuf::as_path))
+    {
+        assert!(
+            p.is_file(),
+            "MORPHKIT_DATA is set but {} is missing",
+            p.display()
+        );
+    }
+    let target_mesh = read_mesh(target).unwrap();
+    let source_mesh = read_mesh(source).unwrap();
+    let work = tmp(name);
+    write_scribble(&work.join("all.json"), 0..target_mesh.num_triangles());
+    let s = |p: &Path| format!("{:?}", p.to_str().unwrap());
+    let recipe = format!(
+        "target = {}\nframes = {}\n[[layer]]\nsource_reference = {}\nsource_frames = [{}]\n\
+         source_scale = {scale:?}\nmarkers = {}\nscribble = \"all.json\"\n",
+        s(target),
+        frames.len(),
+        s(source),
+        frames.iter().map(|p| s(p)).collect::<Vec<_>>().join(", "),
+        s(markers),
+    );
+    std::fs::write(work.join("r.toml"), recipe).unwrap();
+    let built = RecipeFile::read(&work.join("r.toml"))
+        .unwrap()
+        .build()
+        .unwrap();
+    let w = &built.synthesizer.layer_info(0).weights.values;
+    let covered = w.iter().filter(|&&w| w == 1.0).count();
+    assert!(
+        covered > w.len() * 99 / 100,
+        "{covered} of {} at weight 1",
+        w.len()
+    );
+    // Welded as the recipe (and `morphkit transfer`) weld: split seams are one vertex.
+    let source_frames: Vec<Vec<Point>> = frames
+        .iter()
+        .map(|p| {
+            let m = read_mesh(p).unwrap();
+            m.positions.iter().map(|q| q.map(|x| scale * x)).collect()
+        })
+        .collect();
+    let all: Vec<&[Point]> = source_frames.iter().map(|p| &p[..]).collect();
+    let sw = Weld::keeping_triangles(&source_mesh, &all);
+    let tw = Weld::keeping_triangles(&target_mesh, &[]);
+    let (ws, wt) = (sw.mesh(&source_mesh), tw.mesh(&target_mesh));
+    let markers = Markers::read(markers).unwrap();
+    let markers = Markers::new(
+        markers
+            .pairs
+            .iter()
+            .map(|&[a, b]| [sw.to_welded()[a as usize], tw.to_welded()[b as usize]])
+            .collect(),
+    );
+    let corr = correspond(&ws, &wt, &markers, &CorrespondenceOptions::default())
+        .unwrap()
+        .correspondence;
+    let plain = AnimationTransfer::new(&ws, &wt, &corr, &synth_like()).unwrap();
+    let diag = target_mesh.bbox_diagonal();
+    for (f, frame) in source_frames.iter().enumerate() {
+        let want = tw.scatter(&plain.transfer_frame(&sw.gather(frame)).unwrap());
+        let got = built.frame(f).unwrap().positions;
+        let d = got
+            .iter()
+            .zip(&want)
+            .map(|(a, b)| {
+                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+            })
+            .fold(0.0, f64::max);
+        assert!(
+            d < 1e-9 * diag,
+            "{name} frame {f}: {d:e} of diagonal {diag}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&work);
+}
+
 #[test]
 fn a_whole_camel_scribble_is_plain_transfer() {
     let Some(dir) = common::data_dir() else {
@@ -294,49 +379,38 @@ fn a_whole_camel_scribble_is_plain_transfer() {
         .iter()
         .map(|i| hc.join(format!("horse-{i:02}.obj.gz")))
         .collect();
-    for p in &files {
-        assert!(
-            p.is_file(),
-            "MORPHKIT_DATA is set but {} is missing",
-            p.display()
-        );
-    }
-    let camel = read_mesh(&hc.join("camel-reference.obj.gz")).unwrap();
-    let horse = read_mesh(&hc.join("horse-reference.obj.gz")).unwrap();
-    let work = tmp("whole");
-    write_scribble(&work.join("all.json"), 0..camel.num_triangles());
-    let s = |p: &Path| format!("{:?}", p.to_str().unwrap());
-    let recipe = format!(
-        "target = {}\nframes = 3\n[[layer]]\nsource_reference = {}\nsource_frames = [{}]\nmarkers = {}\nscribble = \"all.json\"\n",
-        s(&hc.join("camel-reference.obj.gz")),
-        s(&hc.join("horse-reference.obj.gz")),
-        files.iter().map(|p| s(p)).collect::<Vec<_>>().join(", "),
-        s(&hc.join("markers-horse-camel.json")),
+    whole_target_is_plain_transfer(
+        "whole-camel",
+        (
+            &hc.join("horse-reference.obj.gz"),
+            &hc.join("camel-reference.obj.gz"),
+            &hc.join("markers-horse-camel.json"),
+        ),
+        &files,
+        1.0,
     );
-    std::fs::write(work.join("r.toml"), recipe).unwrap();
-    let built = RecipeFile::read(&work.join("r.toml"))
-        .unwrap()
-        .build()
-        .unwrap();
-    let markers = Markers::read(&hc.join("markers-horse-camel.json")).unwrap();
-    let corr = correspond(&horse, &camel, &markers, &CorrespondenceOptions::default())
-        .unwrap()
-        .correspondence;
-    let plain = AnimationTransfer::new(&horse, &camel, &corr, &synth_like()).unwrap();
-    let diag = camel.bbox_diagonal();
-    for (f, p) in files.iter().enumerate() {
-        let want = plain
-            .transfer_frame(&read_mesh(p).unwrap().positions)
-            .unwrap();
-        let got = built.synthesizer.frame(f).unwrap().positions;
-        let d = got
-            .iter()
-            .zip(&want)
-            .map(|(a, b)| {
-                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-            })
-            .fold(0.0, f64::max);
-        assert!(d < 1e-9 * diag, "frame {f}: {d:e} of diagonal {diag}");
-    }
-    let _ = std::fs::remove_dir_all(&work);
+}
+
+/// Issue 55: the cat's 36-frame run onto the dog through a whole-dog recipe is `morphkit
+/// transfer` (its layers took the defaults of before issue 40, 2 % of the diagonal off).
+#[test]
+fn a_whole_dog_scribble_is_plain_transfer() {
+    let Some(dir) = common::data_dir() else {
+        return common::skip("a_whole_dog_scribble_is_plain_transfer");
+    };
+    let cd = dir.join("lowpoly-cat-dog");
+    let files: Vec<PathBuf> = (1..=36)
+        .map(|i| cd.join("cat-run").join(format!("cat-run-{i:02}.obj.gz")))
+        .collect();
+    // The run is stored at 0.1× the reference's scale (SOURCE.md).
+    whole_target_is_plain_transfer(
+        "whole-dog",
+        (
+            &cd.join("cat-reference.obj"),
+            &cd.join("dog-reference.obj"),
+            &cd.join("markers-cat-dog.json"),
+        ),
+        &files,
+        10.0,
+    );
 }

@@ -110,6 +110,63 @@ fn one_layer_over_the_whole_target_is_plain_transfer() {
     }
 }
 
+/// Issue 55: one whole-target layer is plain transfer with the library's defaults (the
+/// local-stretch frame, confidence and area weights, the fold guard) also where they matter:
+/// a target shaped otherwise than the source (bent and flattened), so that matched triangles
+/// face differently and the old configuration (world frame, uniform weights) is far off.
+#[test]
+fn one_layer_over_an_other_shaped_target_is_plain_transfer_with_its_defaults() {
+    let m = bar();
+    let target = m.with_positions(
+        generate::bend(&m.positions, 1.0, 1.5, 0.9)
+            .iter()
+            .map(|p| [p[0], 1.4 * p[1], 0.7 * p[2]])
+            .collect(),
+    );
+    let frames = bend_animation(&m, 4, 1.0);
+    let c = Correspondence::identity(&m);
+    let spec = LayerSpec {
+        source_reference: m.clone(),
+        frames: frames.clone(),
+        correspondence: c.clone(),
+        scribble: vec![true; m.num_triangles()],
+        mode: BlendMode::Blend,
+        timing: Timing::default(),
+        region: BlendRegion::Partitions,
+    };
+    let opts = SynthOptions {
+        frames: 4,
+        ..Default::default()
+    };
+    let s = Synthesizer::new(&target, vec![spec], &[], &opts).unwrap();
+    assert!(s.layer_info(0).weights.values.iter().all(|&w| w == 1.0));
+    let set = ShapeSet::new(
+        m.clone(),
+        frames
+            .iter()
+            .enumerate()
+            .map(|(i, f)| (format!("f{i}"), f.clone()))
+            .collect(),
+    )
+    .unwrap();
+    let plain = transfer_animation(&m, &set, &target, &c, &TransferOptions::default()).unwrap();
+    let old = TransferOptions {
+        solver: SolverOptions::default(),
+        frame: morphkit::transfer::GradientFrame::World,
+        ..Default::default()
+    };
+    let old = transfer_animation(&m, &set, &target, &c, &old).unwrap();
+    let diag = target.bbox_diagonal();
+    let mut off = 0.0f64;
+    for f in 0..4 {
+        let x = s.frame(f).unwrap().positions;
+        let d = max_dist(&x, &plain[f]);
+        assert!(d < 1e-9 * diag, "frame {f}: {d}");
+        off = off.max(max_dist(&old[f], &plain[f]));
+    }
+    assert!(off > 1e-3 * diag, "the defaults do not matter here: {off}");
+}
+
 #[test]
 fn blending_an_animation_with_itself_returns_it() {
     let m = bar();
@@ -260,7 +317,10 @@ fn timing_offset_speed_and_loop() {
     };
     let opts = SynthOptions {
         frames: 10,
-        translation: morphkit::transfer::TranslationMode::FixedVertex,
+        transfer: TransferOptions {
+            translation: morphkit::transfer::TranslationMode::FixedVertex,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let s = Synthesizer::new(&m, vec![l.clone()], &[], &opts).unwrap();

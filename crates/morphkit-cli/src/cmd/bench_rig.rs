@@ -52,10 +52,11 @@ pub fn run_rig_bench(data_dir: &Path) -> anyhow::Result<Value> {
         corr: super::corr_args::CorrespondenceArgs {
             markers: Some(markers_path.clone()),
             correspondence: None,
-            combine: "inverse-distance".into(),
+            combine: morphkit::transfer::GradientCombine::default().name().into(),
             refine: false,
             // The configuration docs/performance.md's rig timings were measured with.
             no_refine: true,
+            defaults: morphkit::transfer::RigOptions::correspondence(),
         },
         out: dir.join("head-rig.glb"),
         shapes_dir: None,

@@ -1,11 +1,14 @@
 //! The correspondence arguments that `morphkit transfer` and `morphkit rig` share: markers
 //! (the correspondence is computed first) or a correspondence file, how matched gradients
-//! combine, and the closest-point refinement (on by default; `--no-refine`).
+//! combine, and the closest-point refinement (on by default; `--no-refine`). Every default is
+//! the library's (issue 55): `--combine` is [`GradientCombine::default`], and the
+//! correspondence is computed with [`CorrespondenceArgs::defaults`] changed only by the flags
+//! given.
 
 use super::correspond::{confidence_summary, print_summary, summary};
 use anyhow::{bail, Context};
 use morphkit::transfer::{
-    correspond, Correspondence, CorrespondenceOptions, GradientCombine, Markers, RefineOptions,
+    correspond, Correspondence, CorrespondenceOptions, GradientCombine, Markers,
 };
 use morphkit::TriMesh;
 use serde_json::json;
@@ -23,7 +26,8 @@ pub struct CorrespondenceArgs {
     pub correspondence: Option<PathBuf>,
     /// How gradients of several matched source triangles combine: inverse-distance (weights
     /// 1/d; exact on a mesh onto itself), mean, or nearest.
-    #[arg(long, default_value = "inverse-distance", value_parser = ["inverse-distance", "mean", "nearest"])]
+    #[arg(long, default_value = GradientCombine::default().name(),
+        value_parser = GradientCombine::NAMES)]
     pub combine: String,
     /// With --markers: refine the correspondence by closest points (Sumner & Popović 2004,
     /// Sec. 5) before matching. The default of `transfer` (issue 40), not of `rig`.
@@ -33,6 +37,19 @@ pub struct CorrespondenceArgs {
     /// refinement (the default of `rig`, and of `transfer` before issue 40).
     #[arg(long)]
     pub no_refine: bool,
+    /// The options a correspondence is computed with when no flag changes them: the
+    /// library's [`CorrespondenceOptions::default`] (`transfer`), or a command's own (`rig`:
+    /// [`morphkit::transfer::RigOptions::correspondence`]).
+    #[arg(skip = CorrespondenceOptions::default())]
+    pub defaults: CorrespondenceOptions,
+}
+
+/// `--refine` / `--no-refine` applied to `o` ([`CorrespondenceOptions::set_refine`]); neither
+/// keeps `o`'s refinement.
+pub fn apply_refine_flags(o: &mut CorrespondenceOptions, refine: bool, no_refine: bool) {
+    if refine || no_refine {
+        o.set_refine(refine);
+    }
 }
 
 /// A correspondence obtained from [`CorrespondenceArgs`].
@@ -59,18 +76,17 @@ impl CorrespondenceArgs {
         self.markers.iter().chain(&self.correspondence).cloned()
     }
 
-    /// The refinement `--refine` / `--no-refine` ask for: on unless `--no-refine`.
-    pub fn refine_options(&self) -> Option<RefineOptions> {
-        (self.refine || !self.no_refine).then(RefineOptions::default)
+    /// The options a correspondence is computed with: [`CorrespondenceArgs::defaults`] with
+    /// `--refine` / `--no-refine` applied ([`apply_refine_flags`]).
+    pub fn correspondence_options(&self) -> CorrespondenceOptions {
+        let mut o = self.defaults.clone();
+        apply_refine_flags(&mut o, self.refine, self.no_refine);
+        o
     }
 
-    /// `--combine` as the library's option.
+    /// `--combine` as the library's option (clap admits only [`GradientCombine::NAMES`]).
     pub fn combine(&self) -> GradientCombine {
-        match self.combine.as_str() {
-            "nearest" => GradientCombine::Nearest,
-            "mean" => GradientCombine::Mean,
-            _ => GradientCombine::InverseDistance,
-        }
+        GradientCombine::from_name(&self.combine).unwrap_or_default()
     }
 
     /// Computes the correspondence from `source` to `target` (with --markers) or reads it, and
@@ -89,10 +105,7 @@ impl CorrespondenceArgs {
             let markers = Markers::read(m)?;
             crate::util::announce_work("computing the correspondence", target.num_vertices());
             let t0 = Instant::now();
-            let copts = CorrespondenceOptions {
-                refine: self.refine_options(),
-                ..Default::default()
-            };
+            let copts = self.correspondence_options();
             let r = correspond(source, target, &markers, &copts).context("correspondence")?;
             let secs = t0.elapsed().as_secs_f64();
             print_summary(&r, secs);

@@ -9,8 +9,8 @@ use morphkit::io;
 use morphkit::mesh::TriMesh;
 use morphkit::transfer::{
     correspond, correspondence_quality, cycle_consistency, match_confidence, Correspondence,
-    CorrespondenceOptions, CorrespondenceResult, GradientCombine, Markers, RefineOptions,
-    TransferOptions, LOW_CONFIDENCE,
+    CorrespondenceOptions, CorrespondenceResult, GradientCombine, Markers, TransferOptions,
+    LOW_CONFIDENCE,
 };
 use serde_json::json;
 use std::path::PathBuf;
@@ -56,10 +56,10 @@ pub struct CorrespondArgs {
     #[arg(long, default_value_t = morphkit::transfer::OMEGA)]
     pub omega: f64,
     /// Centroid radius, in mean edge lengths of the warped source mesh.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = CorrespondenceOptions::default().radius_factor)]
     pub radius: f64,
     /// Most source triangles kept per target triangle.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = CorrespondenceOptions::default().max_matches)]
     pub max_matches: usize,
     /// Write the warped source mesh here (for inspection).
     #[arg(long, value_name = "MESH")]
@@ -94,7 +94,7 @@ pub struct CorrespondArgs {
 }
 
 /// Options from the command line.
-fn options(args: &CorrespondArgs) -> anyhow::Result<CorrespondenceOptions> {
+pub(crate) fn options(args: &CorrespondArgs) -> anyhow::Result<CorrespondenceOptions> {
     check_positive("--omega", args.omega)?;
     check_range("--radius", args.radius, 0.0, false, f64::INFINITY)?;
     anyhow::ensure!(args.max_matches >= 1, "--max-matches must be at least 1");
@@ -102,7 +102,7 @@ fn options(args: &CorrespondArgs) -> anyhow::Result<CorrespondenceOptions> {
     o.lsmesh.omega = args.omega;
     o.radius_factor = args.radius;
     o.max_matches = args.max_matches;
-    o.refine = (args.refine || !args.no_refine).then(RefineOptions::default);
+    super::corr_args::apply_refine_flags(&mut o, args.refine, args.no_refine);
     o.two_way = !args.one_way;
     Ok(o)
 }

@@ -17,6 +17,8 @@ pub mod blend_rig;
 pub mod convert;
 pub mod corr_args;
 pub mod correspond;
+#[cfg(test)]
+mod defaults_tests;
 pub mod demo;
 pub mod flex;
 pub mod info;

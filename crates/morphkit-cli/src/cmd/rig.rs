@@ -160,6 +160,17 @@ fn read_target(args: &RigArgs, shapes: &ShapeSet) -> anyhow::Result<(TriMesh, Op
     Ok((mesh, Some(asset)))
 }
 
+/// The correspondence arguments with the rig's own defaults (unrefined unless --refine:
+/// [`RigOptions::correspondence`]) and the rig options (the library's [`RigOptions::default`]
+/// with --combine).
+pub(crate) fn options(args: &RigArgs) -> (CorrespondenceArgs, RigOptions) {
+    let mut corr_args = args.corr.clone();
+    corr_args.defaults = RigOptions::correspondence();
+    let mut opts = RigOptions::default();
+    opts.transfer.combine = args.corr.combine();
+    (corr_args, opts)
+}
+
 /// Runs `morphkit rig`.
 pub fn run(args: &RigArgs) -> anyhow::Result<()> {
     let t_all = Instant::now();
@@ -225,12 +236,7 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
     } else {
         source_weld.shapes(&shapes)?
     };
-    // Unrefined unless --refine: issue 40 made the refinement `transfer`'s default, but on
-    // the ICT head onto a rotated, scaled copy of itself (a known answer) it raised the
-    // largest error of cheekPuff_L from under 0.2 % to 6.9 % of its motion
-    // (tests/transfer_rig_real_data.rs).
-    let mut corr_args = args.corr.clone();
-    corr_args.no_refine = !corr_args.refine;
+    let (corr_args, opts) = options(args);
     let corr = weld_util::obtain_welded(
         &corr_args,
         (&neutral, &source_weld),
@@ -239,8 +245,6 @@ pub fn run(args: &RigArgs) -> anyhow::Result<()> {
         false,
     )?
     .correspondence;
-    let mut opts = RigOptions::default();
-    opts.transfer.combine = args.corr.combine();
     crate::util::announce_work("factorizing the transfer system", target.num_vertices());
     let t0 = Instant::now();
     let rt = RigTransfer::new(&neutral, &target, &corr, &opts)?;

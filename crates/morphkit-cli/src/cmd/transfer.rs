@@ -114,7 +114,7 @@ pub(crate) fn read_frames(paths: &[PathBuf], source_ref: &Path) -> anyhow::Resul
     Ok(set?)
 }
 
-fn options(args: &TransferArgs) -> anyhow::Result<TransferOptions> {
+pub(crate) fn options(args: &TransferArgs) -> anyhow::Result<TransferOptions> {
     let mut o = TransferOptions::default();
     if let Some(v) = args.fixed_vertex {
         o.translation = TranslationMode::FixedVertex;

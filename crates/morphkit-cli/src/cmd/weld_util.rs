@@ -7,7 +7,7 @@ use super::corr_args::{CorrespondenceArgs, Obtained};
 use super::correspond::{confidence_summary, print_summary, summary};
 use anyhow::{bail, Context};
 use morphkit::mesh::{Point, Weld};
-use morphkit::transfer::{correspond, Correspondence, CorrespondenceOptions, Markers};
+use morphkit::transfer::{correspond, Correspondence, Markers};
 use morphkit::TriMesh;
 use std::time::Instant;
 
@@ -124,10 +124,7 @@ pub fn obtain_welded(
         .with_context(|| format!("{}", m.display()))?;
     crate::util::announce_work("computing the correspondence", target.num_vertices());
     let t0 = Instant::now();
-    let copts = CorrespondenceOptions {
-        refine: args.refine_options(),
-        ..Default::default()
-    };
+    let copts = args.correspondence_options();
     let mut r = correspond(source, target, &markers, &copts).context("correspondence")?;
     let secs = t0.elapsed().as_secs_f64();
     let welded = r.correspondence.clone();

@@ -5,7 +5,16 @@ use super::gradient_blend::BlendMode;
 use super::synthesizer::{LayerInfo, LayerSpec, Timing};
 use super::{SynthError, WeightSolver};
 use crate::mesh::{Point, TriMesh};
-use crate::transfer::{Correspondence, GradientOperator, Placement};
+use crate::transfer::correspondence::polar;
+use crate::transfer::{Correspondence, GradientCombine, GradientOperator, Placement};
+use nalgebra::{Matrix3, Vector3};
+
+/// A layer's source gradients at one output frame, as its transfer carries them: as they are
+/// (world frame), or split into rotation and stretch (local-stretch frame).
+pub(crate) enum Carried {
+    World(Vec<Matrix3<f64>>, GradientCombine),
+    Local(Vec<(Matrix3<f64>, Matrix3<f64>)>, GradientCombine),
+}
 
 /// One built layer: its source, weights, timing and placement.
 #[derive(Debug)]
@@ -21,9 +30,43 @@ pub(crate) struct Layer {
     /// gradients are blended between source frames.
     pub(crate) needed: Vec<bool>,
     pub(crate) info: LayerInfo,
+    /// Unit normals of the source reference's triangles (local-stretch frame only).
+    pub(crate) source_normals: Option<Vec<Vector3<f64>>>,
 }
 
 impl Layer {
+    /// Source gradients `g` as this layer carries them.
+    pub(crate) fn carry(&self, g: Vec<Matrix3<f64>>, combine: GradientCombine) -> Carried {
+        match self.source_normals {
+            None => Carried::World(g, combine),
+            Some(_) => Carried::Local(g.iter().map(polar).collect(), combine),
+        }
+    }
+
+    /// The target gradients of carried source gradients, as
+    /// [`AnimationTransfer`](crate::transfer::AnimationTransfer) computes them: in the local
+    /// frame (`target_normals`) turned, or unturned for the fold guard.
+    pub(crate) fn target_gradients(
+        &self,
+        carried: &Carried,
+        target_normals: Option<&[Vector3<f64>]>,
+        turned: bool,
+    ) -> Vec<Matrix3<f64>> {
+        let c = &self.correspondence;
+        match carried {
+            Carried::World(g, combine) => c.map_gradients(g, *combine),
+            Carried::Local(p, combine) => {
+                let ns = self.source_normals.as_deref().expect("local stretch");
+                let nt = target_normals.expect("local stretch");
+                if turned {
+                    c.map_gradients_local(p, ns, nt, *combine)
+                } else {
+                    c.map_gradients_local_unturned(p, ns, nt, *combine)
+                }
+            }
+        }
+    }
+
     /// Source time of output frame `f`: `(frame, next, fraction)`, or `None` when inactive.
     pub(crate) fn source_time(&self, f: usize) -> Option<(usize, usize, f64)> {
         let n = self.frames.len();

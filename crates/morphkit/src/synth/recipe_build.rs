@@ -16,7 +16,7 @@ use super::{
 use crate::io::{self, Format};
 use crate::mesh::{Point, ShapeSet, TriMesh, Weld};
 use crate::transfer::{
-    correspond, Correspondence, CorrespondenceOptions, Markers, TranslationMode,
+    correspond, Correspondence, CorrespondenceOptions, Markers, TransferOptions, TranslationMode,
 };
 use std::collections::HashMap;
 use std::ops::Range;
@@ -398,13 +398,15 @@ impl RecipeFile {
             frames: *r.frames.get_ref(),
             gamma: r.gamma.as_ref().map_or(super::GAMMA, |g| *g.get_ref()),
             kappa: r.kappa.as_ref().map_or(super::KAPPA, |g| *g.get_ref()),
-            translation: match r.translation.unwrap_or_default() {
-                TranslationKind::Follow => TranslationMode::FollowMarkers,
-                TranslationKind::Fixed => TranslationMode::FixedVertex,
+            transfer: TransferOptions {
+                translation: match r.translation.unwrap_or_default() {
+                    TranslationKind::Follow => TranslationMode::FollowMarkers,
+                    TranslationKind::Fixed => TranslationMode::FixedVertex,
+                },
+                ..TransferOptions::default()
             },
             follow_layer: r.follow_layer.as_ref().map(|f| *f.get_ref()),
             rest: rest.map(|p| target_weld.gather(&p)),
-            ..Default::default()
         };
         let read_seconds = t0.elapsed().as_secs_f64() - corr_seconds;
         let synthesizer =

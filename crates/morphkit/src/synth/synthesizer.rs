@@ -11,6 +11,17 @@
 //! 4. one prefactored solve ([`TransferSolver::solve`]) and the translation convention of the
 //!    *follow* layer ([`Placement`]).
 //!
+//! **As transfer does** (issue 55). Each layer carries its source gradients onto the target as
+//! [`AnimationTransfer`](crate::transfer::AnimationTransfer) does with the same
+//! [`TransferOptions`] ([`SynthOptions::transfer`], default [`TransferOptions::default`]): in
+//! the local-stretch frame by default, the solve area-weighted and each target triangle's term
+//! weighted by its matches' confidence, and a frame that creases guarded as
+//! [`fold_guard`](crate::transfer::fold_guard) describes (the unturned alternative is the same
+//! layering of every layer's unturned gradients). The solve is factored once, so the
+//! confidence of triangle $t$ is fixed: starting from 1 (the rest layer), each layer in recipe
+//! order mixes in its own, $c_t \leftarrow (1 - w_{kt})\,c_t + w_{kt}\,c_{kt}$, whatever its
+//! mode and timing. One layer of weight 1 everywhere is therefore plain transfer.
+//!
 //! **Timing.** Layer $k$ drives output frames from `offset` on at `speed` source frames per
 //! output frame: source time $s = (f - \text{offset}) \cdot \text{speed}$. A fractional $s$
 //! blends the two neighbouring source frames' gradients ([`super::blend_gradient`]). With
@@ -26,6 +37,7 @@
 
 use super::geodesic::{geodesic_weights, HeatGeodesics, HeatOptions};
 use super::gradient_blend::{apply_layer, blend_gradient, BlendMode};
+use super::layer::Carried;
 use super::layer::{check_contradictions, check_layer, Layer};
 use super::pose::{rotation_gradients, PoseEditor};
 use super::{
@@ -33,12 +45,14 @@ use super::{
     WeightSolver, GAMMA, KAPPA,
 };
 use crate::mesh::{Point, Topology, TriMesh};
+use crate::transfer::animation::unit_normals;
+use crate::transfer::fold_guard::guarded_solve;
 use crate::transfer::gradients::FlipCheck;
 use crate::transfer::{
-    Correspondence, GradientCombine, GradientOperator, Placement, SolverOptions, TransferSolver,
-    TranslationMode,
+    Correspondence, FoldGuard, GradientFrame, GradientOperator, GuardOutcome, Placement,
+    TransferOptions, TransferSolver,
 };
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Vector3};
 use std::time::Instant;
 
 /// How a layer's weights are found.
@@ -116,14 +130,12 @@ pub struct SynthOptions {
     pub gamma: f64,
     /// Soft-constraint weight κ of Eq. 5. Default 10 000 (the paper's).
     pub kappa: f64,
-    /// Options of the one transfer solve.
-    pub solver: SolverOptions,
-    /// How several matched source triangles combine. Default: the transfer's default
-    /// ([`GradientCombine::default`], inverse-distance weights), so that a synthesis with one
-    /// whole-mesh layer is plain transfer.
-    pub combine: GradientCombine,
-    /// Translation: follow a layer's markers (default) or keep the constraint vertex fixed.
-    pub translation: TranslationMode,
+    /// How every layer is transferred (the solve's weights and constraint vertices, how
+    /// matched gradients combine, the frame they are carried in, the fold guard) and the
+    /// translation (follow a layer's markers or keep the constraint vertex fixed). Default:
+    /// [`TransferOptions::default`], the defaults of `morphkit transfer`, so that a synthesis
+    /// with one whole-target layer is plain transfer (issue 55).
+    pub transfer: TransferOptions,
     /// Layer whose source motion the target's translation follows. Default `None`: the layer
     /// with the largest total weight (the first on a tie).
     pub follow_layer: Option<usize>,
@@ -138,9 +150,7 @@ impl Default for SynthOptions {
             frames: 1,
             gamma: GAMMA,
             kappa: KAPPA,
-            solver: SolverOptions::default(),
-            combine: GradientCombine::default(),
-            translation: TranslationMode::FollowMarkers,
+            transfer: TransferOptions::default(),
             follow_layer: None,
             rest: None,
         }
@@ -173,6 +183,8 @@ pub struct SynthFrame {
     pub blend_seconds: f64,
     /// Seconds in the solve and placement.
     pub solve_seconds: f64,
+    /// What the fold guard did (local-stretch frame only).
+    pub guard: GuardOutcome,
 }
 
 /// Layers and pose edits on one target, factored once; then frame after frame.
@@ -187,7 +199,11 @@ pub struct Synthesizer {
     follow: Option<usize>,
     frames: usize,
     factor_seconds: f64,
-    combine: GradientCombine,
+    opts: TransferOptions,
+    /// Unit normals of the target reference's triangles (local-stretch frame only).
+    target_normals: Option<Vec<Vector3<f64>>>,
+    /// The fold guard and the target's topology (local-stretch frame only).
+    guard: Option<(FoldGuard, Topology)>,
 }
 
 fn layer_info(
@@ -261,9 +277,8 @@ impl Synthesizer {
                 why: "at least one output frame",
             });
         }
-        let t0 = Instant::now();
-        let solver = TransferSolver::new(target, &opts.solver)?;
-        let factor_seconds = t0.elapsed().as_secs_f64();
+        let local = opts.transfer.frame == GradientFrame::LocalStretch;
+        let target_normals = local.then(|| unit_normals(target));
         let nf = target.num_triangles();
         let topology = Topology::new(target.num_vertices(), &target.triangles);
         let mut heat = None;
@@ -285,13 +300,14 @@ impl Synthesizer {
                 }
             }
             built.push(Layer {
+                source_normals: local.then(|| unit_normals(&spec.source_reference)),
                 needed,
                 gradients: GradientOperator::new(&spec.source_reference),
                 placement: Placement::new(
                     &spec.source_reference,
                     target,
                     &spec.correspondence,
-                    opts.translation,
+                    opts.transfer.translation,
                 ),
                 correspondence: spec.correspondence,
                 frames: spec.frames,
@@ -302,6 +318,23 @@ impl Synthesizer {
             });
         }
         check_contradictions(&built, opts.frames)?;
+        // The confidence of each target triangle's term (module doc), local stretch only.
+        let mut confidence = Vec::new();
+        if let Some(nt) = &target_normals {
+            confidence = vec![1.0; nf];
+            for l in &built {
+                let ns = l.source_normals.as_ref().expect("local stretch");
+                let lc = l
+                    .correspondence
+                    .local_confidence(ns, nt, opts.transfer.combine);
+                for ((c, &w), lc) in confidence.iter_mut().zip(&l.info.weights.values).zip(lc) {
+                    *c = (1.0 - w) * *c + w * lc;
+                }
+            }
+        }
+        let t0 = Instant::now();
+        let solver = TransferSolver::with_confidence(target, &opts.transfer.solver, &confidence)?;
+        let factor_seconds = t0.elapsed().as_secs_f64();
         let rest = match &opts.rest {
             Some(p) => GradientOperator::new(target).gradients(p)?,
             None => vec![Matrix3::identity(); nf],
@@ -333,7 +366,12 @@ impl Synthesizer {
             follow,
             frames: opts.frames,
             factor_seconds,
-            combine: opts.combine,
+            opts: opts.transfer.clone(),
+            guard: match (&target_normals, opts.transfer.fold_guard) {
+                (Some(_), Some(g)) => Some((g, topology)),
+                _ => None,
+            },
+            target_normals,
         };
         for (i, p) in poses.iter().enumerate() {
             synth.edit_pose(p).map_err(|e| SynthError::InPose {
@@ -411,12 +449,21 @@ impl Synthesizer {
         &self.target
     }
 
-    /// The target gradients of layer `k` at output frame `f`, or `None` when inactive.
+    /// The target gradients of layer `k` at output frame `f` (carried as
+    /// [`SynthOptions::transfer`] says, turned in the local-stretch frame), or `None` when
+    /// inactive.
     pub fn layer_gradients(
         &self,
         k: usize,
         f: usize,
     ) -> Result<Option<Vec<Matrix3<f64>>>, SynthError> {
+        Ok(self
+            .carried(k, f)?
+            .map(|c| self.layers[k].target_gradients(&c, self.target_normals.as_deref(), true)))
+    }
+
+    /// Layer `k`'s source gradients at output frame `f` as it carries them, or `None`.
+    fn carried(&self, k: usize, f: usize) -> Result<Option<Carried>, SynthError> {
         let layer = &self.layers[k];
         let Some((i, j, frac)) = layer.source_time(f) else {
             return Ok(None);
@@ -434,15 +481,20 @@ impl Synthesizer {
                 *a = blend_gradient(a, b, frac);
             }
         }
-        Ok(Some(layer.correspondence.map_gradients(&g, self.combine)))
+        Ok(Some(layer.carry(g, self.opts.combine)))
     }
 
-    /// The wanted gradients $N_t$ of output frame `f` (module doc, steps 1–3).
-    pub fn gradients(&self, f: usize) -> Result<Vec<Matrix3<f64>>, SynthError> {
+    /// Every layer's carried source gradients at output frame `f`.
+    fn all_carried(&self, f: usize) -> Result<Vec<Option<Carried>>, SynthError> {
+        (0..self.layers.len()).map(|k| self.carried(k, f)).collect()
+    }
+
+    /// The layers' gradients, turned or not, composed (module doc, steps 1–3).
+    fn compose(&self, carried: &[Option<Carried>], turned: bool) -> Vec<Matrix3<f64>> {
         let mut g = self.rest.clone();
-        for k in 0..self.layers.len() {
-            if let Some(l) = self.layer_gradients(k, f)? {
-                let layer = &self.layers[k];
+        for (layer, c) in self.layers.iter().zip(carried) {
+            if let Some(c) = c {
+                let l = layer.target_gradients(c, self.target_normals.as_deref(), turned);
                 apply_layer(&mut g, &l, &layer.info.weights.values, layer.mode);
             }
         }
@@ -451,15 +503,33 @@ impl Synthesizer {
                 *a *= b;
             }
         }
-        Ok(g)
+        g
+    }
+
+    /// The wanted gradients $N_t$ of output frame `f` (module doc, steps 1–3), before the
+    /// fold guard.
+    pub fn gradients(&self, f: usize) -> Result<Vec<Matrix3<f64>>, SynthError> {
+        Ok(self.compose(&self.all_carried(f)?, true))
     }
 
     /// Synthesises output frame `f` (0-based, below [`Synthesizer::num_frames`]).
     pub fn frame(&self, f: usize) -> Result<SynthFrame, SynthError> {
         let t0 = Instant::now();
-        let gradients = self.gradients(f)?;
+        let carried = self.all_carried(f)?;
+        let wanted = self.compose(&carried, true);
         let t1 = Instant::now();
-        let mut positions = self.solver.solve(&gradients)?;
+        let solve = |g: &[Matrix3<f64>]| self.solver.solve(g);
+        let (mut positions, gradients, guard) = match &self.guard {
+            Some((guard, topology)) => guarded_solve(
+                guard,
+                &self.target,
+                topology,
+                wanted,
+                || self.compose(&carried, false),
+                solve,
+            )?,
+            None => (solve(&wanted)?, wanted, GuardOutcome::default()),
+        };
         if let Some(k) = self.follow {
             let layer = &self.layers[k];
             let src = layer
@@ -472,6 +542,7 @@ impl Synthesizer {
             gradients,
             blend_seconds: (t1 - t0).as_secs_f64(),
             solve_seconds: t1.elapsed().as_secs_f64(),
+            guard,
         })
     }
 

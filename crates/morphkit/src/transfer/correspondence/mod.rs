@@ -77,6 +77,19 @@ impl Default for CorrespondenceOptions {
     }
 }
 
+impl CorrespondenceOptions {
+    /// Turns the closest-point refinement on (keeping options already set, else
+    /// [`RefineOptions::default`]) or off: what `--refine` / `--no-refine` and the Python
+    /// module's `refine=True` / `refine=False` do to the defaults.
+    pub fn set_refine(&mut self, on: bool) {
+        if !on {
+            self.refine = None;
+        } else if self.refine.is_none() {
+            self.refine = Some(RefineOptions::default());
+        }
+    }
+}
+
 /// How far one marker is from its target position after warping.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MarkerResidual {
@@ -107,6 +120,28 @@ pub enum GradientCombine {
     /// mesh onto itself is exact), the mean when the file records no distances.
     #[default]
     InverseDistance,
+}
+
+impl GradientCombine {
+    /// Every combination by the name the CLI (`--combine`) and the Python module (`combine=`)
+    /// give it, in the order of [`GradientCombine::NAMES`].
+    pub const ALL: [GradientCombine; 3] = [Self::InverseDistance, Self::Mean, Self::Nearest];
+    /// The names of [`GradientCombine::ALL`]: `inverse-distance`, `mean`, `nearest`.
+    pub const NAMES: [&'static str; 3] = ["inverse-distance", "mean", "nearest"];
+
+    /// The name of this combination (one of [`GradientCombine::NAMES`]).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::InverseDistance => Self::NAMES[0],
+            Self::Mean => Self::NAMES[1],
+            Self::Nearest => Self::NAMES[2],
+        }
+    }
+
+    /// The combination named `name` (one of [`GradientCombine::NAMES`]), or `None`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|c| c.name() == name)
+    }
 }
 
 /// A correspondence and the two warped meshes it was found on.
