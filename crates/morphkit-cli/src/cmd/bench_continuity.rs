@@ -102,7 +102,11 @@ pub fn run_continuity_bench(data_dir: Option<&Path>, steps: usize) -> anyhow::Re
     if let Some(dir) = data_dir {
         let [(horse, _), (face, _)] = real_rigs(dir)?;
         rows.push(rig_row("horse (10 poses)", &horse, steps)?);
-        rows.push(rig_row("ICT FaceKit (10 expressions), welded", &face, steps)?);
+        rows.push(rig_row(
+            "ICT FaceKit (10 expressions), welded",
+            &face,
+            steps,
+        )?);
     } else {
         println!("continuity suite: the real rigs need --data DIR or MORPHKIT_DATA (sumner-horse-camel, ict-facekit)");
     }
