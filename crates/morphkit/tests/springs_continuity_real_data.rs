@@ -48,8 +48,8 @@ fn welded_ict_eye_blink_moves_continuously_across_0_59() {
 }
 
 /// Bounded work: the horse's poses 1 and 6 at 0.5 and 0.7 (rest lengths extrapolated past a
-/// sum of 1) have no equilibrium near the start; the solve crept for over 4 minutes. It now
-/// stops within its factorization budget and says it did not converge.
+/// sum of 1) have no equilibrium near the start; the solve crept for 392 s to the iteration
+/// cap. It now stops within its factorization budget (300) and says it did not converge.
 #[test]
 fn a_frame_with_no_equilibrium_near_its_start_stops_within_its_budget() {
     let Some(base) = common::data_file("sumner-horse-camel/horse-reference.obj.gz") else {
@@ -70,7 +70,7 @@ fn a_frame_with_no_equilibrium_near_its_start_stops_within_its_budget() {
         r.stats.converged, r.stats.newton_iterations, r.stats.factorizations, r.stats.seconds
     );
     assert!(
-        r.stats.factorizations <= 160,
+        r.stats.factorizations <= 310,
         "{} factorizations",
         r.stats.factorizations
     );

@@ -42,6 +42,10 @@ pub(crate) struct Problem<'a> {
     /// Whether [`trust_region`] starts in its projected phase (see [`PROJECTED_PHASE`])
     /// instead of entering it at the exact model's first failed step.
     pub projected_first: bool,
+    /// Numeric factorizations this solve may use before it stops unconverged (`0`: no
+    /// limit): [`BlendOptions::max_factorizations`] for a frame, none for the set-up solves
+    /// (samples, snapshots, references), which run to convergence once per rig.
+    pub factorization_budget: usize,
 }
 
 impl Problem<'_> {
@@ -263,34 +267,24 @@ const PROJECTED_PHASE: f64 = 1e-2;
 /// factorization; with `only_reference`, the solve stops there instead (unconverged: a
 /// probe). Far from the equilibrium its model may be the projected Hessian
 /// ([`PROJECTED_PHASE`]). Returns the final gradient.
-/// Numeric factorizations one solve may use (regularization retries included) before it
-/// stops unconverged (issue 54). A frame of the horse's poses 1 and 6 at 0.5 and 0.7 used 209
-/// in its first 60 Newton iterations and 405 in 100 (13 s, then 125 s: its Hessians grew
-/// indefinite and every step retried its shifts); converging frames use a few to a few
-/// dozen. A count, not a time, so that a frame stays a function of its weights.
-pub(crate) const FACTORIZATION_BUDGET: usize = 150;
-
-/// Newton iterations over which the gradient must make progress (issue 54).
-pub(crate) const STALL_WINDOW: usize = 40;
-
-/// Whether the iteration has stalled: over the last [`STALL_WINDOW`] iterations the largest
-/// gradient entry never fell below half of the best before them. Where no equilibrium lies
-/// near the start (the horse's poses 1 and 6 at 0.5 and 0.7, rest lengths extrapolated past
-/// a sum of 1) the trust region crept for minutes (over 4 on one thread) without converging;
-/// now such a frame stops, unconverged, after about a window, and says so with its weights.
-/// Converging frames halve their gradient many times over in a window (at most 37 Newton
-/// iterations in all on the sweeps of `morphkit bench --suite continuity`). The rule reads
-/// the iterates alone, so it stays deterministic.
-fn stalled(history: &[f64]) -> bool {
+/// Whether the iteration has stalled: over the last `window` iterations the largest
+/// gradient entry never fell below half of the best before them
+/// ([`BlendOptions::stall_iterations`](super::BlendOptions::stall_iterations); `0`: never).
+/// Where no equilibrium lies near the start (the horse's poses 1 and 6 at 0.5 and 0.7, rest
+/// lengths extrapolated past a sum of 1) the trust region crept for minutes without
+/// converging: 209 factorizations in its first 60 Newton iterations, 405 in 100 (13 s, then
+/// 125 s). With [`BlendOptions::max_factorizations`](super::BlendOptions::max_factorizations)
+/// it now stops after 41 iterations and says so. Both read the iterates alone.
+fn stalled(history: &[f64], window: usize) -> bool {
     let k = history.len();
-    if k <= STALL_WINDOW {
+    if window == 0 || k <= window {
         return false;
     }
-    let best_before = history[..k - STALL_WINDOW]
+    let best_before = history[..k - window]
         .iter()
         .copied()
         .fold(f64::INFINITY, f64::min);
-    let best_since = history[k - STALL_WINDOW..]
+    let best_since = history[k - window..]
         .iter()
         .copied()
         .fold(f64::INFINITY, f64::min);
@@ -329,10 +323,13 @@ pub(crate) fn trust_region(
     let mut accepted_since = 0usize;
     let (mut last_cg, mut last_converged) = (usize::MAX, false);
     let mut model_failed = prob.projected_first;
-    // The largest gradient entry after each iteration, for the stall rule (STALL_WINDOW).
+    // The largest gradient entry after each iteration, for the stall rule (`stalled`).
     let mut history: Vec<f64> = Vec::new();
     while !stats.converged && stats.newton_iterations < prob.options.max_newton_iterations {
-        if stalled(&history) || stats.factorizations >= FACTORIZATION_BUDGET {
+        let budget = prob.factorization_budget;
+        if stalled(&history, prob.options.stall_iterations)
+            || (budget > 0 && stats.factorizations >= budget)
+        {
             break;
         }
         stats.newton_iterations += 1;

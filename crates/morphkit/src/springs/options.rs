@@ -24,6 +24,15 @@ pub struct BlendOptions {
     /// Newton iterations allowed per solve; a solve that has not converged by then is
     /// returned with `converged = false` and the vertices that failed. Default `300`.
     pub max_newton_iterations: usize,
+    /// Newton iterations over which a solve's largest gradient entry must fall below half of
+    /// its best before them, or the solve stops unconverged (issue 54: where no equilibrium
+    /// lies near the start it crept for minutes). `0`: no such rule. Default `100`.
+    pub stall_iterations: usize,
+    /// Numeric factorizations (regularization retries included) one frame may use before it
+    /// stops unconverged (issue 54; set-up solves such as the sampled start's samples and the
+    /// interactive snapshots run to convergence). `0`: no limit. Default `300`. Both rules are counts over
+    /// the iterates, never times, so a frame stays a function of its weights.
+    pub max_factorizations: usize,
     /// Interpolated rest lengths are clamped below at this fraction of the spring's shortest
     /// length over the shapes (only extrapolated weights reach it; counted per frame), and
     /// stiffness $k_0/\bar r$ uses at least this fraction of its longest. Default `0.05`.
@@ -279,6 +288,8 @@ impl Default for BlendOptions {
             fixed: FixedVertices::Auto,
             gradient_tolerance: 1e-6,
             max_newton_iterations: 300,
+            stall_iterations: 100,
+            max_factorizations: 300,
             min_rest_fraction: 0.05,
             kinematic_stretch: 10.0,
             hold_ramp: 0.05,

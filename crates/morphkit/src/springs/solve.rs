@@ -77,6 +77,10 @@ impl Rig {
                     projected_first: matches!(from, Start::Canonical)
                         && self.options.sampled_start
                         && !StartSamples::needed_pairs(c).is_empty(),
+                    factorization_budget: match from {
+                        Start::Canonical => self.options.max_factorizations,
+                        _ => 0,
+                    },
                 };
                 self.iterate(ws, &prob, c, factor, x, stats, &frame.lin)
             })

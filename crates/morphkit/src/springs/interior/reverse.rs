@@ -116,6 +116,9 @@ pub fn solve(
         kinematic_stretch: f64::INFINITY,
         // The equilibrium of the extra springs alone: no pull towards the starting guess.
         tether: 0.0,
+        // Set-up, not a frame: it converges slowly from far, and must not stop early.
+        stall_iterations: 0,
+        max_factorizations: 0,
         ..options.clone()
     };
     let term: Box<dyn EnergyTerm> = Box::new(SpringTerm::new(set, o.min_rest_fraction));
