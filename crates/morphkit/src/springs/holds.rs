@@ -74,11 +74,7 @@ impl Rows {
 
     /// Each vertex with its targets' largest absolute weight in `c`.
     fn largest<'a>(&'a self, c: &'a [f64]) -> impl Iterator<Item = (u32, f64)> + 'a {
-        self.vertices.iter().enumerate().map(move |(i, &v)| {
-            let row = &self.targets[self.offsets[i] as usize..self.offsets[i + 1] as usize];
-            let m = row.iter().map(|&s| c[s as usize].abs()).fold(0.0, f64::max);
-            (v, m)
-        })
+        self.largest_and_other(c, &[]).map(|(v, m, _)| (v, m))
     }
 
     /// Per vertex: its largest weight as [`largest`](Self::largest), and the largest weight
@@ -181,7 +177,7 @@ impl FrameHolds {
     /// At a shape itself (one-hot weights) there are none: the equilibrium is that shape with
     /// or without them, and a reference factor made there must not have them masked out.
     pub(super) fn targets(&self, c: &[f64], lin: &[Point]) -> Vec<PointTarget> {
-        if c.iter().filter(|&&w| w != 0.0).count() == 1 && c.contains(&1.0) {
+        if super::weights::one_hot(c).is_some() {
             return Vec::new();
         }
         let r = self.ramp;

@@ -86,15 +86,22 @@ impl Rig {
             })
             .map(|(mut r, x)| {
                 r.stats.seconds = start.elapsed().as_secs_f64();
-                // At one-hot weights a frame that is its shape to round-off (an equilibrium
-                // after zero iterations, nothing pulling) is the shape's own numbers.
-                if let Some(s) = one_hot(c) {
-                    if targets.is_empty() && r.stats.converged && r.stats.newton_iterations == 0 {
-                        r.positions = self.shapes.positions(s).to_vec();
-                    }
+                if targets.is_empty() {
+                    self.own_numbers_at_a_shape(c, &mut r);
                 }
                 (r, x)
             })
+    }
+
+    /// At one-hot coefficients, a result that is its shape to round-off (an equilibrium after
+    /// zero iterations, nothing pulling) becomes the shape's own numbers: the full solve and
+    /// the interactive mode both end here (issues 54 and 55).
+    pub(super) fn own_numbers_at_a_shape(&self, c: &[f64], r: &mut BlendResult) {
+        if let Some(s) = one_hot(c) {
+            if r.stats.converged && r.stats.newton_iterations == 0 {
+                r.positions = self.shapes.positions(s).to_vec();
+            }
+        }
     }
 
     /// Where the frame with coefficients `c` and energy `frame` starts from `from`, in solver

@@ -294,14 +294,10 @@ impl Rig {
         }
         stats.converged = stats.gradient_norm <= self.tolerance;
         stats.seconds = started.elapsed().as_secs_f64();
-        let mut positions = predictor::output(&self.constraints, &x, &frame.lin);
-        if let Some(s) = crate::springs::weights::one_hot(c) {
-            // As the full solve: a shape's own weights give its own numbers.
-            if stats.converged && stats.newton_iterations == 0 {
-                positions = self.shapes.positions(s).to_vec();
-            }
-        }
-        Ok((BlendResult { positions, stats }, x))
+        let positions = predictor::output(&self.constraints, &x, &frame.lin);
+        let mut r = BlendResult { positions, stats };
+        self.own_numbers_at_a_shape(c, &mut r);
+        Ok((r, x))
     }
 
     /// The free coordinates of the vertices `held` holds.
