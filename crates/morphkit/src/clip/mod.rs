@@ -1,0 +1,288 @@
+//! Compact clips: a sequence of `F` frames of `#V` displacements written as `K ≪ F` shapes and
+//! an `F × K` table of coefficients, within a tolerance on every vertex of every frame
+//! (issue 56).
+//!
+//! A physical clip differs from the linear blend of its own weights by a residual that is
+//! smooth in time and in space (Ma et al. 2012 §4: the equilibrium moves continuously with the
+//! rest lengths), so a few shapes span it. A glTF viewer then plays the clip as the asset's own
+//! targets at the clip's weights plus these shapes, as ordinary morph targets, at their
+//! coefficients; no extension is needed. [`residual_basis`] finds the shapes:
+//!
+//! 1. The principal directions of the residuals, from the eigenvectors of the smaller of the
+//!    two Gram matrices `R Rᵀ` (`F × F`) and `Rᵀ R` (`3V × 3V`) — `R` is the `F × 3V` matrix
+//!    of residuals — in order of decreasing eigenvalue: the truncated SVD, which minimises the
+//!    summed squared error for each `K`.
+//! 2. The tolerance is on the *largest* vertex error of any frame, which the SVD does not
+//!    minimise: shapes are taken in that order until every frame is within it. When the
+//!    directions run out before that (rounding), the worst frame's own remainder is the next
+//!    shape (a pivoted Gram–Schmidt step), which brings that frame to zero.
+//! 3. Each shape is stored as `f32` (what a glTF target holds), scaled so that its largest
+//!    coefficient over the clip is 1 (an ordinary slider range); the coefficients are the
+//!    projections of what remains onto the stored shape, also rounded to `f32`. The error
+//!    reported is that of the stored numbers, not of the exact SVD.
+//!
+//! The computation is sequential (faer without threads), so the same frames give the same
+//! shapes, bytes included, on any machine load.
+
+use crate::mesh::Point;
+use faer::{Mat, Side};
+
+#[cfg(test)]
+mod tests;
+
+/// Why [`residual_basis`] refused its input.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ClipError {
+    /// No frame, or frames of no vertex.
+    #[error("no frames to compress")]
+    Empty,
+    /// Frame `frame` has another vertex count than frame 0.
+    #[error("frame {frame} has {found} vertices, frame 0 has {expected}")]
+    VertexCount {
+        /// The frame.
+        frame: usize,
+        /// Frame 0's vertex count.
+        expected: usize,
+        /// This frame's.
+        found: usize,
+    },
+    /// A coordinate is NaN or infinite.
+    #[error("frame {frame}, vertex {vertex}: a coordinate is not finite")]
+    NotFinite {
+        /// The frame.
+        frame: usize,
+        /// The vertex.
+        vertex: usize,
+    },
+    /// The tolerance is not a finite positive number.
+    #[error("the tolerance {0} is not a finite positive distance")]
+    Tolerance(f64),
+    /// `max_shapes` shapes leave a frame further than the tolerance.
+    #[error(
+        "{max_shapes} shapes leave frame {frame} {error:.3e} from its residual, more than the \
+         tolerance {tolerance:.3e}"
+    )]
+    TooManyShapes {
+        /// The most shapes allowed.
+        max_shapes: usize,
+        /// The worst frame with that many.
+        frame: usize,
+        /// Its largest vertex error.
+        error: f64,
+        /// The tolerance asked for.
+        tolerance: f64,
+    },
+}
+
+/// `K` shapes and their coefficients: frame `f` is `Σₖ coefficients[f][k] · shapes[k]` within
+/// [`ClipBasis::max_error`] at every vertex.
+#[derive(Clone, Debug)]
+pub struct ClipBasis {
+    /// `K` shapes of `#V` displacements, each coordinate an `f32` value. Each is scaled so that
+    /// its largest coefficient magnitude over the frames is 1 (and that coefficient positive).
+    pub shapes: Vec<Vec<Point>>,
+    /// `F` rows of `K` coefficients, each an `f32` value.
+    pub coefficients: Vec<Vec<f64>>,
+    /// The largest distance, over every vertex of every frame, between a frame and its
+    /// reconstruction from the stored (rounded) shapes and coefficients.
+    pub max_error: f64,
+    /// The frame where [`ClipBasis::max_error`] is reached.
+    pub worst_frame: usize,
+}
+
+impl ClipBasis {
+    /// Frame `f` rebuilt from the shapes: `#V` displacements.
+    pub fn frame(&self, f: usize) -> Vec<Point> {
+        let n = self.shapes.first().map_or(0, Vec::len);
+        let mut out = vec![[0.0; 3]; n];
+        for (c, s) in self.coefficients[f].iter().zip(&self.shapes) {
+            for (o, p) in out.iter_mut().zip(s) {
+                for a in 0..3 {
+                    o[a] += c * p[a];
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The largest vertex norm of row `r` (`3V` values) and where it is.
+fn row_max(r: &[f64]) -> f64 {
+    r.chunks_exact(3)
+        .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+        .fold(0.0, f64::max)
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Shapes for `frames` (`F` frames of `#V` displacements, e.g. a physical clip minus the linear
+/// blend of its weights), as few as bring every vertex of every frame within `tolerance` (a
+/// distance, in the frames' units), at most `max_shapes`. See the
+/// [module documentation](self) for the method; frames that are all zero give no shape.
+///
+/// Errors: no frame or no vertex, frames of different vertex counts, a non-finite coordinate
+/// (naming frame and vertex), a tolerance that is not a finite positive number, and more than
+/// `max_shapes` shapes needed ([`ClipError::TooManyShapes`], with the error that many leave).
+pub fn residual_basis(
+    frames: &[Vec<Point>],
+    tolerance: f64,
+    max_shapes: usize,
+) -> Result<ClipBasis, ClipError> {
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(ClipError::Tolerance(tolerance));
+    }
+    let nf = frames.len();
+    let nv = frames.first().map_or(0, Vec::len);
+    if nf == 0 || nv == 0 {
+        return Err(ClipError::Empty);
+    }
+    let d = 3 * nv;
+    // The remainders, frame-major: what the shapes chosen so far leave.
+    let mut rest: Vec<Vec<f64>> = Vec::with_capacity(nf);
+    for (f, fr) in frames.iter().enumerate() {
+        if fr.len() != nv {
+            return Err(ClipError::VertexCount {
+                frame: f,
+                expected: nv,
+                found: fr.len(),
+            });
+        }
+        if let Some(v) = fr.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
+            return Err(ClipError::NotFinite {
+                frame: f,
+                vertex: v,
+            });
+        }
+        rest.push(fr.iter().flatten().copied().collect());
+    }
+    let directions = principal_directions(&rest, d);
+    let mut shapes: Vec<Vec<f64>> = Vec::new();
+    let mut coefficients: Vec<Vec<f64>> = vec![Vec::new(); nf];
+    let mut errors: Vec<f64> = rest.iter().map(|r| row_max(r)).collect();
+    let mut next = directions.into_iter();
+    loop {
+        let (worst, &error) = errors
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))
+            .expect("a frame");
+        if error <= tolerance {
+            break;
+        }
+        if shapes.len() == max_shapes {
+            return Err(ClipError::TooManyShapes {
+                max_shapes,
+                frame: worst,
+                error,
+                tolerance,
+            });
+        }
+        // The next principal direction, or the worst frame's own remainder.
+        let dir = next.next().unwrap_or_else(|| rest[worst].clone());
+        let Some(shape) = stored_shape(&rest, &dir) else {
+            // A direction nothing projects on (rounded to zero): take the pivot instead.
+            let Some(shape) = stored_shape(&rest, &rest[worst].clone()) else {
+                break;
+            };
+            add_shape(shape, &mut rest, &mut coefficients, &mut shapes);
+            errors = rest.iter().map(|r| row_max(r)).collect();
+            continue;
+        };
+        add_shape(shape, &mut rest, &mut coefficients, &mut shapes);
+        errors = rest.iter().map(|r| row_max(r)).collect();
+    }
+    let (worst_frame, max_error) = errors
+        .iter()
+        .copied()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
+        .expect("a frame");
+    Ok(ClipBasis {
+        shapes: shapes
+            .into_iter()
+            .map(|s| s.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect())
+            .collect(),
+        coefficients,
+        max_error,
+        worst_frame,
+    })
+}
+
+/// The shape along `dir` as stored: scaled so that the largest projection of a remainder on it
+/// is +1, rounded to `f32`. `None` when nothing projects on it.
+fn stored_shape(rest: &[Vec<f64>], dir: &[f64]) -> Option<Vec<f64>> {
+    let norm2 = dot(dir, dir);
+    if !(norm2 > 0.0 && norm2.is_finite()) {
+        return None;
+    }
+    // Projections on the unit direction; the one of largest magnitude sets scale and sign.
+    let unit: Vec<f64> = dir.iter().map(|x| x / norm2.sqrt()).collect();
+    let c = rest
+        .iter()
+        .map(|r| dot(r, &unit))
+        .max_by(|a, b| a.abs().total_cmp(&b.abs()))?;
+    if c == 0.0 || !c.is_finite() {
+        return None;
+    }
+    let shape: Vec<f64> = unit.iter().map(|x| (x * c) as f32 as f64).collect();
+    (dot(&shape, &shape) > 0.0).then_some(shape)
+}
+
+/// Appends `shape`: each remainder's projection on it, rounded to `f32`, becomes its
+/// coefficient and is subtracted.
+fn add_shape(
+    shape: Vec<f64>,
+    rest: &mut [Vec<f64>],
+    coefficients: &mut [Vec<f64>],
+    shapes: &mut Vec<Vec<f64>>,
+) {
+    let s2 = dot(&shape, &shape);
+    for (r, c) in rest.iter_mut().zip(coefficients.iter_mut()) {
+        let k = (dot(r, &shape) / s2) as f32 as f64;
+        if k != 0.0 {
+            for (x, s) in r.iter_mut().zip(&shape) {
+                *x -= k * s;
+            }
+        }
+        c.push(k);
+    }
+    shapes.push(shape);
+}
+
+/// The principal directions of the rows of `rows` (`F` rows of `d` values), unnormalised, in
+/// order of decreasing eigenvalue, those with an eigenvalue above rounding only.
+fn principal_directions(rows: &[Vec<f64>], d: usize) -> Vec<Vec<f64>> {
+    let nf = rows.len();
+    let r = Mat::<f64>::from_fn(nf, d, |i, j| rows[i][j]);
+    let small_side = nf <= d;
+    let gram = if small_side {
+        &r * r.transpose()
+    } else {
+        r.transpose() * &r
+    };
+    let Ok(eig) = gram.self_adjoint_eigen(Side::Lower) else {
+        return Vec::new();
+    };
+    let n = gram.nrows();
+    let s = eig.S().column_vector();
+    let u = eig.U();
+    let largest = (0..n).map(|i| s[i]).fold(0.0, f64::max);
+    // Ascending order from faer: walk it backwards; drop what is rounding.
+    let floor = largest * 1e-24 + f64::MIN_POSITIVE;
+    (0..n)
+        .rev()
+        .filter(|&i| s[i] > floor)
+        .map(|i| {
+            if small_side {
+                // Rᵀ u: the row-space direction of the left singular vector u.
+                (0..d)
+                    .map(|j| (0..nf).map(|f| r[(f, j)] * u[(f, i)]).sum())
+                    .collect()
+            } else {
+                (0..d).map(|j| u[(j, i)]).collect()
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,144 @@
+use super::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// `f` frames of `v` vertices: `rank` random shapes at random coefficients, plus noise of
+/// amplitude `noise` per coordinate.
+fn frames(f: usize, v: usize, rank: usize, noise: f64, seed: u64) -> Vec<Vec<Point>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let shapes: Vec<Vec<Point>> = (0..rank)
+        .map(|_| {
+            (0..v)
+                .map(|_| std::array::from_fn(|_| rng.random_range(-1.0..1.0)))
+                .collect()
+        })
+        .collect();
+    (0..f)
+        .map(|_| {
+            let c: Vec<f64> = (0..rank).map(|_| rng.random_range(-2.0..2.0)).collect();
+            (0..v)
+                .map(|i| {
+                    std::array::from_fn(|a| {
+                        let s: f64 = (0..rank).map(|k| c[k] * shapes[k][i][a]).sum();
+                        s + noise * rng.random_range(-1.0..1.0)
+                    })
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The largest vertex distance between the frames and the basis's reconstruction.
+fn worst(frames: &[Vec<Point>], b: &ClipBasis) -> f64 {
+    let mut w: f64 = 0.0;
+    for (f, fr) in frames.iter().enumerate() {
+        for (p, q) in fr.iter().zip(b.frame(f)) {
+            let d = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+            w = w.max(d);
+        }
+    }
+    w
+}
+
+#[test]
+fn a_low_rank_clip_needs_its_rank_and_no_more() {
+    // F > 3V (the 3V × 3V Gram) and F < 3V (the F × F Gram).
+    for (f, v) in [(60, 8), (12, 40)] {
+        let fr = frames(f, v, 3, 0.0, 7);
+        let b = residual_basis(&fr, 1e-6, 50).unwrap();
+        assert_eq!(b.shapes.len(), 3, "{f} frames of {v} vertices");
+        assert!(b.max_error <= 1e-6, "{}", b.max_error);
+        // The reported error is the true error of the stored numbers.
+        let w = worst(&fr, &b);
+        assert!((w - b.max_error).abs() <= 1e-12, "{w} vs {}", b.max_error);
+    }
+}
+
+#[test]
+fn every_frame_is_within_the_tolerance_and_a_looser_one_needs_fewer_shapes() {
+    let fr = frames(40, 30, 6, 0.02, 11);
+    let mut last = usize::MAX;
+    for tol in [1e-3, 0.03, 0.1, 1.0] {
+        let b = residual_basis(&fr, tol, 200).unwrap();
+        let w = worst(&fr, &b);
+        assert!(w <= tol, "tolerance {tol}: worst {w}");
+        assert!(b.shapes.len() <= last, "tolerance {tol}: {} shapes", b.shapes.len());
+        last = b.shapes.len();
+    }
+    // The noise (0.02 per coordinate, up to 0.035 per vertex) needs more than the six shapes
+    // at 1e-3, the six alone are enough at 0.1.
+    assert!(residual_basis(&fr, 1e-3, 200).unwrap().shapes.len() > 6);
+    assert!(residual_basis(&fr, 0.1, 200).unwrap().shapes.len() <= 6);
+}
+
+#[test]
+fn stored_numbers_are_f32_and_each_shape_peaks_at_one() {
+    let fr = frames(25, 10, 4, 0.0, 3);
+    let b = residual_basis(&fr, 1e-5, 50).unwrap();
+    for s in &b.shapes {
+        assert!(s.iter().flatten().all(|&x| x as f32 as f64 == x));
+    }
+    for k in 0..b.shapes.len() {
+        let col: Vec<f64> = b.coefficients.iter().map(|c| c[k]).collect();
+        assert!(col.iter().all(|&x| x as f32 as f64 == x));
+        let peak = col.iter().copied().max_by(|a, b| a.abs().total_cmp(&b.abs()));
+        assert!((peak.unwrap() - 1.0).abs() < 1e-5, "shape {k}: {peak:?}");
+    }
+}
+
+#[test]
+fn zero_frames_need_no_shape_and_the_same_frames_give_the_same_bits() {
+    let zero = vec![vec![[0.0; 3]; 5]; 4];
+    let b = residual_basis(&zero, 1e-9, 10).unwrap();
+    assert!(b.shapes.is_empty());
+    assert_eq!(b.max_error, 0.0);
+    let fr = frames(30, 20, 5, 0.01, 5);
+    let a = residual_basis(&fr, 1e-3, 100).unwrap();
+    let c = residual_basis(&fr, 1e-3, 100).unwrap();
+    let bits = |b: &ClipBasis| -> Vec<u64> {
+        b.shapes
+            .iter()
+            .flatten()
+            .flatten()
+            .chain(b.coefficients.iter().flatten())
+            .map(|x| x.to_bits())
+            .collect()
+    };
+    assert_eq!(bits(&a), bits(&c));
+}
+
+#[test]
+fn bad_input_is_refused_with_its_place() {
+    assert_eq!(residual_basis(&[], 1e-3, 5).unwrap_err(), ClipError::Empty);
+    let mut fr = frames(4, 3, 2, 0.0, 1);
+    assert_eq!(
+        residual_basis(&fr, 0.0, 5).unwrap_err(),
+        ClipError::Tolerance(0.0)
+    );
+    assert!(matches!(
+        residual_basis(&fr, f64::NAN, 5),
+        Err(ClipError::Tolerance(_))
+    ));
+    fr[2][1][0] = f64::NAN;
+    assert_eq!(
+        residual_basis(&fr, 1e-3, 5).unwrap_err(),
+        ClipError::NotFinite {
+            frame: 2,
+            vertex: 1
+        }
+    );
+    fr[2].pop();
+    assert!(matches!(
+        residual_basis(&fr, 1e-3, 5),
+        Err(ClipError::VertexCount { frame: 2, .. })
+    ));
+    // Full rank noise cannot be reached with one shape.
+    let fr = frames(10, 6, 0, 0.5, 2);
+    match residual_basis(&fr, 1e-4, 1) {
+        Err(ClipError::TooManyShapes { max_shapes, error, .. }) => {
+            assert_eq!(max_shapes, 1);
+            assert!(error > 1e-4);
+        }
+        other => panic!("{other:?}"),
+    }
+}
