@@ -62,7 +62,11 @@ fn every_frame_is_within_the_tolerance_and_a_looser_one_needs_fewer_shapes() {
         let b = residual_basis(&fr, tol, 200).unwrap();
         let w = worst(&fr, &b);
         assert!(w <= tol, "tolerance {tol}: worst {w}");
-        assert!(b.shapes.len() <= last, "tolerance {tol}: {} shapes", b.shapes.len());
+        assert!(
+            b.shapes.len() <= last,
+            "tolerance {tol}: {} shapes",
+            b.shapes.len()
+        );
         last = b.shapes.len();
     }
     // The noise (0.02 per coordinate, up to 0.035 per vertex) needs more than the six shapes
@@ -81,7 +85,10 @@ fn stored_numbers_are_f32_and_each_shape_peaks_at_one() {
     for k in 0..b.shapes.len() {
         let col: Vec<f64> = b.coefficients.iter().map(|c| c[k]).collect();
         assert!(col.iter().all(|&x| x as f32 as f64 == x));
-        let peak = col.iter().copied().max_by(|a, b| a.abs().total_cmp(&b.abs()));
+        let peak = col
+            .iter()
+            .copied()
+            .max_by(|a, b| a.abs().total_cmp(&b.abs()));
         assert!((peak.unwrap() - 1.0).abs() < 1e-5, "shape {k}: {peak:?}");
     }
 }
@@ -135,7 +142,9 @@ fn bad_input_is_refused_with_its_place() {
     // Full rank noise cannot be reached with one shape.
     let fr = frames(10, 6, 0, 0.5, 2);
     match residual_basis(&fr, 1e-4, 1) {
-        Err(ClipError::TooManyShapes { max_shapes, error, .. }) => {
+        Err(ClipError::TooManyShapes {
+            max_shapes, error, ..
+        }) => {
             assert_eq!(max_shapes, 1);
             assert!(error > 1e-4);
         }

@@ -15,7 +15,7 @@
 //!   sampler driving them (a run of `#targets`-vectors for `STEP`, `LINEAR` and `CUBICSPLINE`
 //!   alike), rewritten as `f32` (sparse when smaller).
 
-use super::asset::{GltfAsset, GltfWeightAnimation, WeightSampler};
+use super::asset::{GltfAsset, WeightSampler};
 use super::normals::{to_f32_unit, vertex_normals};
 use super::write::to_f32;
 use crate::io::IoError;
@@ -23,7 +23,7 @@ use crate::mesh::Point;
 use serde_json::{json, Value};
 
 const ARRAY_BUFFER: u32 = 34962;
-const FLOAT: u32 = 5126;
+pub(super) const FLOAT: u32 = 5126;
 const UNSIGNED_INT: u32 = 5125;
 
 /// `doc[key]` as an array, created when missing.
@@ -35,7 +35,7 @@ fn array<'a>(doc: &'a mut Value, key: &str) -> &'a mut Vec<Value> {
 }
 
 /// Appends `v` to `doc[key]`; returns its index.
-fn push(doc: &mut Value, key: &str, v: Value) -> usize {
+pub(super) fn push(doc: &mut Value, key: &str, v: Value) -> usize {
     let a = array(doc, key);
     a.push(v);
     a.len() - 1
@@ -68,7 +68,7 @@ impl GltfAsset {
     }
 
     /// Appends `bytes` as a new 4-byte-aligned buffer view; returns its index.
-    fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
+    pub(super) fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
         let b = self.edit_buffer();
         let buf = &mut self.buffers[b];
         while !buf.len().is_multiple_of(4) {
@@ -107,7 +107,7 @@ impl GltfAsset {
 
     /// A SCALAR f32 accessor of `values`, sparse (no buffer view, the nonzero values and
     /// their `u32` indices; glTF 2.0 §3.6.2.3) when that is smaller than dense.
-    fn weights(&mut self, values: &[f32]) -> usize {
+    pub(super) fn weights(&mut self, values: &[f32]) -> usize {
         let nz: Vec<usize> = (0..values.len()).filter(|&i| values[i] != 0.0).collect();
         if nz.is_empty() || 2 * nz.len() >= values.len() {
             let bytes: Vec<u8> = values.iter().flat_map(|x| x.to_le_bytes()).collect();
@@ -131,7 +131,7 @@ impl GltfAsset {
     }
 
     /// The nodes that use the chosen mesh.
-    fn mesh_nodes(&self) -> Vec<usize> {
+    pub(super) fn mesh_nodes(&self) -> Vec<usize> {
         self.doc["nodes"].as_array().map_or_else(Vec::new, |n| {
             (0..n.len())
                 .filter(|&i| n[i]["mesh"].as_u64() == Some(self.mesh as u64))
@@ -250,7 +250,7 @@ impl GltfAsset {
     }
 
     /// [`GltfAsset::add_targets`], returning the index of each target.
-    fn add_targets_at(
+    pub(super) fn add_targets_at(
         &mut self,
         names: &[String],
         positions: &[Vec<Point>],
@@ -416,127 +416,5 @@ impl GltfAsset {
             w.shared = false;
             w.values = f.iter().map(|&x| x as f64).collect();
         }
-    }
-
-    /// Fails when [`GltfAsset::add_frame_animation`] would refuse an animation `clip_name` of
-    /// `frames` frames at `times`, for what it refuses before the positions: no frame, times and
-    /// frames of different counts, times not finite or not strictly increasing as `f32`, no
-    /// node using the mesh, more morph targets than [`GltfAsset::max_targets`] (a split rig).
-    /// A command calls it before it makes the frames, so that these errors come before the
-    /// work.
-    pub fn check_frame_animation(
-        &self,
-        clip_name: &str,
-        times: &[f64],
-        frames: usize,
-    ) -> Result<(), IoError> {
-        let bad = |m: String| IoError::content(&self.path, format!("animation '{clip_name}': {m}"));
-        if frames == 0 {
-            return Err(bad("no frames to animate (the frames are empty)".into()));
-        }
-        if times.len() != frames {
-            return Err(bad(format!("{} times for {frames} frames", times.len())));
-        }
-        if let Some(k) = super::anim::first_unordered_key(times) {
-            return Err(bad(super::anim::unordered_key_message(times, k)));
-        }
-        if times[0] < 0.0 {
-            return Err(bad(format!(
-                "key time 0 is {} s; glTF key times must not be negative",
-                times[0]
-            )));
-        }
-        if self.mesh_nodes().is_empty() {
-            return Err(bad("no node uses the mesh, so nothing would play it".into()));
-        }
-        let fresh = (0..frames)
-            .filter(|k| {
-                let name = format!("{clip_name}_{k:04}");
-                !self.morphs.target_names.contains(&name)
-            })
-            .count();
-        self.check_room(fresh)
-    }
-
-    /// Adds a physical animation: one new morph target per frame (`frames[k]`, `#V` absolute
-    /// positions, named `CLIP_0000`, …) and an animation `clip_name` that keys them one at a
-    /// time — key `k` at `times[k]` seconds has weight 1 on frame `k`'s target and 0 on every
-    /// other — `LINEAR`, so it plays the frames' positions interpolated. Its output is stored
-    /// sparsely. It drives every node that uses the mesh; an existing animation of the same
-    /// name is replaced (same index; its frames' targets are replaced by name). Existing
-    /// animations get weight 0 for the new targets (see the [module documentation](self)).
-    ///
-    /// Errors: those of [`GltfAsset::add_targets`]; no frame, times and frames of different
-    /// counts, times negative (glTF keys start at 0 s or later), not finite or not strictly
-    /// increasing as `f32`, no node using the mesh.
-    pub fn add_frame_animation(
-        &mut self,
-        clip_name: &str,
-        times: &[f64],
-        frames: &[Vec<Point>],
-    ) -> Result<(), IoError> {
-        self.check_frame_animation(clip_name, times, frames.len())?;
-        let nodes = self.mesh_nodes();
-        let names: Vec<String> = (0..frames.len())
-            .map(|k| format!("{clip_name}_{k:04}"))
-            .collect();
-        let at = self.add_targets_at(&names, frames)?;
-        let n = self.morphs.targets.len();
-        let mut rows = vec![0.0f32; frames.len() * n];
-        for (k, &t) in at.iter().enumerate() {
-            rows[k * n + t] = 1.0;
-        }
-        let ts: Vec<f32> = times.iter().map(|&t| t as f32).collect();
-        let tb: Vec<u8> = ts.iter().flat_map(|x| x.to_le_bytes()).collect();
-        let tv = self.view(&tb, None);
-        let input = push(
-            &mut self.doc,
-            "accessors",
-            json!({"bufferView": tv, "componentType": FLOAT, "count": ts.len(), "type": "SCALAR",
-                   "min": [ts[0]], "max": [ts[ts.len() - 1]]}),
-        );
-        let output = self.weights(&rows);
-        let channels: Vec<Value> = nodes
-            .iter()
-            .map(|&node| json!({"sampler": 0, "target": {"node": node, "path": "weights"}}))
-            .collect();
-        let anim = json!({
-            "name": clip_name,
-            "samplers": [{"input": input, "output": output, "interpolation": "LINEAR"}],
-            "channels": channels,
-        });
-        let existing = self.doc["animations"]
-            .as_array()
-            .and_then(|a| a.iter().position(|x| x["name"].as_str() == Some(clip_name)));
-        let index = match existing {
-            Some(i) => {
-                self.doc["animations"][i] = anim;
-                self.samplers.retain(|s| s.anim != i);
-                self.animations.retain(|a| a.index != i);
-                i
-            }
-            None => push(&mut self.doc, "animations", anim),
-        };
-        let keys: Vec<(f64, Vec<f64>)> = ts
-            .iter()
-            .zip(rows.chunks(n))
-            .map(|(&t, w)| (t as f64, w.iter().map(|&x| x as f64).collect()))
-            .collect();
-        self.samplers.push(WeightSampler {
-            anim: index,
-            sampler: 0,
-            channels: (0..nodes.len()).collect(),
-            shared: false,
-            values: rows.iter().map(|&x| x as f64).collect(),
-        });
-        self.animations.push(GltfWeightAnimation {
-            index,
-            name: Some(clip_name.to_string()),
-            keys,
-        });
-        self.animations.sort_by_key(|a| a.index);
-        // What a reader takes: the first animation driving the mesh.
-        self.morphs.weight_keys = self.animations[0].keys.clone();
-        Ok(())
     }
 }

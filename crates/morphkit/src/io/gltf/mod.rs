@@ -81,6 +81,7 @@
 mod accessor;
 mod anim;
 mod asset;
+mod asset_anim;
 mod asset_edit;
 mod asset_write;
 mod budget;
@@ -194,6 +195,8 @@ impl GltfMorphs {
     }
 }
 
+#[cfg(test)]
+mod asset_anim_tests;
 #[cfg(test)]
 mod asset_tests;
 #[cfg(test)]

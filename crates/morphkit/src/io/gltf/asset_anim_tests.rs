@@ -1,0 +1,141 @@
+//! Tests of the compact physical animation ([`GltfAsset::add_compact_animation`]): written,
+//! read back and played from the stored numbers, it gives the frames within the basis's error.
+
+use super::{GltfAsset, GltfAssetOptions, GltfReadOptions};
+use crate::clip::residual_basis;
+use crate::mesh::Point;
+use std::path::PathBuf;
+
+#[path = "../../../tests/common/gltf_asset.rs"]
+mod fixture;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("morphkit-anim-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn largest_distance(a: &[Point], b: &[Point]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| {
+            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+        })
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn a_compact_clip_plays_the_frames_within_its_error() {
+    let d = tmp("compact");
+    let p = d.join("a.glb");
+    fixture::write(&p, &fixture::standard(true, 1.0));
+    let mut a = GltfAsset::read(&p, &GltfReadOptions::default()).unwrap();
+    let m = a.morphs().clone();
+    let n0 = m.targets.len();
+    // 30 frames: the linear blend of the targets at smooth weights, plus a bend that the
+    // targets cannot make (the "physical" residual), of rank 2 over the clip.
+    let weights: Vec<Vec<f64>> = (0..30)
+        .map(|k| {
+            let t = k as f64 / 29.0;
+            (0..n0).map(|i| (t * (i + 1) as f64).sin().abs()).collect()
+        })
+        .collect();
+    let frames: Vec<Vec<Point>> = weights
+        .iter()
+        .enumerate()
+        .map(|(k, w)| {
+            let t = k as f64 / 29.0;
+            m.evaluate(w)
+                .iter()
+                .zip(&m.base.positions)
+                .map(|(q, b)| {
+                    let bend = 0.05 * t * b[2] * b[2] + 0.02 * (3.0 * t).sin() * b[1];
+                    [q[0] + bend, q[1], q[2]]
+                })
+                .collect()
+        })
+        .collect();
+    let residuals: Vec<Vec<Point>> = frames
+        .iter()
+        .zip(&weights)
+        .map(|(f, w)| {
+            f.iter()
+                .zip(m.evaluate(w))
+                .map(|(p, l)| [p[0] - l[0], p[1] - l[1], p[2] - l[2]])
+                .collect()
+        })
+        .collect();
+    let diag = m.base.bbox_diagonal();
+    let basis = residual_basis(&residuals, 1e-4 * diag, 10).unwrap();
+    assert_eq!(basis.shapes.len(), 2, "{} {}", basis.max_error, diag);
+    let times: Vec<f64> = (0..30).map(|k| k as f64 / 30.0).collect();
+    // Rows that do not match are refused before anything changes.
+    let e = a
+        .clone()
+        .add_compact_animation("physical", &times[..29], &weights[..29], &basis)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("30 rows of corrective weights for 29 keys"),
+        "{e}"
+    );
+    a.add_compact_animation("physical", &times, &weights, &basis)
+        .unwrap();
+    let out = d.join("b.glb");
+    a.write(&out, &GltfAssetOptions::default()).unwrap();
+    let b = GltfAsset::read(&out, &GltfReadOptions::default()).unwrap();
+    assert_eq!(b.morphs().targets.len(), n0 + 2);
+    assert_eq!(
+        b.morphs().target_names[n0..],
+        ["physical_corrective_00", "physical_corrective_01"]
+    );
+    let anim = b.weight_animation(Some("physical")).unwrap().unwrap();
+    assert_eq!(anim.keys.len(), 30);
+    for (k, (t, w)) in anim.keys.iter().enumerate() {
+        assert_eq!(*t, times[k] as f32 as f64);
+        let played = b.morphs().evaluate(w);
+        let e = largest_distance(&played, &frames[k]);
+        // The basis's error, and f32 storage of targets and weights.
+        assert!(e <= basis.max_error + 1e-5 * diag, "frame {k}: {e}");
+    }
+    // The other animations leave the correctives at 0.
+    for other in ["Wave", "Pulse"] {
+        let anim = b.weight_animation(Some(other)).unwrap().unwrap();
+        assert!(anim.keys.iter().all(|(_, w)| w[n0..] == [0.0, 0.0]));
+    }
+    // A second run on the output replaces the correctives and the clip by name...
+    let padded: Vec<Vec<f64>> = weights
+        .iter()
+        .map(|w| w.iter().copied().chain([0.0, 0.0]).collect())
+        .collect();
+    let mut c = b.clone();
+    let e = c
+        .clone()
+        .add_compact_animation("physical", &times, &weights, &basis)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(&format!(
+            "key 0: {n0} weights for the mesh's {} targets",
+            n0 + 2
+        )),
+        "{e}"
+    );
+    c.add_compact_animation("physical", &times, &padded, &basis)
+        .unwrap();
+    assert_eq!(c.morphs().targets.len(), n0 + 2);
+    assert_eq!(c.weight_animations().len(), b.weight_animations().len());
+    // ...but refuses to replace a corrective the clip itself weighs.
+    let mut own = padded.clone();
+    own[3][n0 + 1] = 0.5;
+    let e = c
+        .add_compact_animation("physical", &times, &own, &basis)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("weighs the target 'physical_corrective_01'"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
