@@ -1,7 +1,7 @@
 //! The inputs of `morphkit blend` beyond the meshes: fixed vertices (in the welded numbering),
 //! the weights of every frame, and the memory an animation's frames will take.
 
-use super::blend::{BlendArgs, MAX_FRAMES};
+use super::blend_args::{BlendArgs, MAX_FRAMES};
 use crate::outputs::is_frame_dir;
 use crate::util::read_json;
 use crate::weights::{self, Origin};
@@ -104,7 +104,7 @@ pub(super) fn frame_weights(a: &BlendArgs, n_shapes: usize) -> anyhow::Result<Ve
 /// (`f64` × 3, all frames are kept until the write) and what the writer builds in memory
 /// before the file (a .glb/.gltf buffer: `f32` positions and normals; a .usda text layer:
 /// about 40 characters a point). A frame directory or .pc2 is streamed
-/// ([`io::FrameStream`]) and holds [`FRAME_CHUNK`] frames at most: nothing per frame.
+/// ([`io::FrameStream`]) and holds [`FRAME_CHUNK`](super::blend_args::FRAME_CHUNK) frames at most: nothing per frame.
 fn bytes_per_frame_vertex(out: &Path) -> u64 {
     let dir = is_frame_dir(out);
     if io::FrameStream::supports(out, dir) {

@@ -8,7 +8,7 @@
 //! seconds. The solve is `blend`'s own (welding included); only the reading and the writing
 //! differ.
 
-use super::blend::{BlendArgs, MAX_FRAMES};
+use super::blend_args::{BlendArgs, MAX_FRAMES};
 use crate::outputs::Outputs;
 use crate::weights::{self, Origin};
 use anyhow::{bail, Context};

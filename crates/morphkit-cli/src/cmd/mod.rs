@@ -10,6 +10,7 @@ pub mod bench_synth;
 pub mod bench_transfer;
 pub mod bench_volume;
 pub mod blend;
+pub mod blend_args;
 pub mod blend_inputs;
 pub mod blend_interactive;
 pub mod blend_outputs;

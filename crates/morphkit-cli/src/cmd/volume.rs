@@ -14,7 +14,8 @@
 //! - `--anchor auto|x,y,z[,size]`: a small stiff cube inside the base whose vertices are the
 //!   boundary conditions; the result follows its slerp-interpolated rigid motion.
 
-use super::blend::{report_jumps, unconverged_path, weights_json, write_region, BlendArgs};
+use super::blend::{report_jumps, unconverged_path, weights_json, write_region};
+use super::blend_args::BlendArgs;
 use crate::outputs::Outputs;
 use crate::util::progress;
 use anyhow::{bail, Context};
