@@ -2,9 +2,9 @@
 //! [`BlendArgs`], the limits every mode shares ([`MAX_FRAMES`], [`FRAME_CHUNK`]), the thread
 //! count, and the solver's [`BlendOptions`] built from the flags.
 //!
-//! Every mode and every shared step of `blend` reads `BlendArgs`, so it sits in a module that
-//! imports none of them (they imported it from `blend.rs`, and `blend.rs` imported them back).
-//! Nothing here reads a file or writes one; the fixed vertices arrive already read and welded.
+//! This is the bottom of `blend`'s one-way stack (see [`super::blend`]): every mode and every
+//! shared step reads `BlendArgs`, so it sits in a module that imports none of them. Nothing
+//! here reads a file or writes one; the fixed vertices arrive already read and welded.
 
 use morphkit::springs::{BlendOptions, FixedVertices, HingeOptions, Precision, SpringOptions};
 use std::path::PathBuf;
