@@ -1,13 +1,13 @@
 //! The `--rig` mode of `morphkit blend` when `--out` is a .glb/.gltf: the output is the rig's
 //! own asset (materials, skins, other meshes and animations kept) with clips added. The
 //! pipeline is [`run`]: inputs (an [`Input`] and the [`Rig`] read by `blend_rig.rs`) → the
-//! surface solve ([`super::blend_solve`]), every frame kept → [`write`], the output step.
+//! surface solve ([`super::blend_solve`]), every frame kept → [`write()`], the output step.
 //!
-//! [`write`] receives everything a clip may be made from, in a [`RigFrames`]: the rig (asset,
+//! [`write()`] receives everything a clip may be made from, in a [`RigFrames`]: the rig (asset,
 //! per-frame weights and times, clip name), the solved frames, the shapes and the arguments.
 //! Each kind of clip is a function of its own ([`add_physical_clip`] today: one morph target
 //! per frame); a new kind (say, corrective targets from each frame's residual against the
-//! linear blend, [`RigFrames::linear`]) is another such function called from [`write`].
+//! linear blend, [`RigFrames::linear`]) is another such function called from [`write()`].
 //!
 //! A mode at the top of `blend`'s one-way stack (see [`super::blend`]); the rig's reader sits
 //! low in it (`blend_rig.rs`), since the common input step calls it. A `--rig` run whose
