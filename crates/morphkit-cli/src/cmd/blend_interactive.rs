@@ -2,7 +2,7 @@
 //! space (`morphkit::springs::interactive`) instead of the full canonical solve, as a slider
 //! preview would be, with each frame's error estimate in the report.
 
-use super::blend::BlendArgs;
+use super::blend_args::BlendArgs;
 use anyhow::Context;
 use morphkit::springs::{BlendResult, InteractiveCacheUse, PhysicalBlend, Weights};
 use serde_json::{json, Value};

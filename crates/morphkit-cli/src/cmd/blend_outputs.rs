@@ -1,5 +1,9 @@
 //! The side outputs of `morphkit blend` and its volumetric path: regions of unconverged or
 //! jumping vertices beside the output, and weights as the report writes them.
+//!
+//! Shared by the surface frame solve (`blend_solve.rs`) and the volumetric mode (`volume.rs`),
+//! and named by the common input step when it stages the outputs, so it sits near the bottom
+//! of `blend`'s one-way stack (see [`super::blend`]) and imports no `blend` module.
 
 use crate::outputs::Outputs;
 use morphkit::io;

@@ -5,17 +5,21 @@
 //! The weights of frame `k` are key `k` of the file's weights animation (`--animation NAME`
 //! picks one when several drive the mesh), played at the key's time; or row `k` of
 //! `--weights-file`, whose CSV header row may name the targets (others weigh 0), at `k / fps`
-//! seconds. The solve is `blend`'s own (welding included); only the reading and the writing
-//! differ.
+//! seconds. The solve is `blend`'s own (welding included); only the reading (here) and the
+//! writing (`blend_rig_out.rs`) differ.
+//!
+//! This file is the rig's *input* step and sits low in `blend`'s one-way stack (see
+//! [`super::blend`]): the common reader [`super::blend_inputs::read`] calls it, so it imports
+//! only the arguments ([`super::blend_args`]). The rig's output step, which needs the frame
+//! solve, is a mode above it, in [`super::blend_rig_out`].
 
-use super::blend::{BlendArgs, MAX_FRAMES};
-use crate::outputs::Outputs;
+use super::blend_args::{BlendArgs, MAX_FRAMES};
 use crate::weights::{self, Origin};
 use anyhow::{bail, Context};
 use morphkit::io::{self, Format, GltfAsset, GltfReadOptions};
-use morphkit::mesh::{Point, ShapeSet};
+use morphkit::mesh::ShapeSet;
 use morphkit::springs::Weights;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A rig read for `blend --rig`.
 pub(super) struct Rig {
@@ -122,26 +126,4 @@ pub(super) fn read(a: &BlendArgs, path: &Path) -> anyhow::Result<(Rig, ShapeSet)
         clip,
     };
     Ok((rig, shapes))
-}
-
-/// Adds the solved `frames` (the input's layout, one per weight vector) to the rig's asset as
-/// its physical animation and stages it at `out`.
-pub(super) fn write(
-    outputs: &mut Outputs,
-    out: &Path,
-    mut rig: Rig,
-    frames: Vec<(String, Vec<Point>)>,
-    inputs: &[PathBuf],
-) -> anyhow::Result<()> {
-    let positions: Vec<Vec<Point>> = frames.into_iter().map(|f| f.1).collect();
-    rig.asset
-        .add_frame_animation(&rig.clip, &rig.times, &positions)?;
-    outputs.gltf_asset(out, &rig.asset, inputs, positions.len())?;
-    eprintln!(
-        "added the animation '{}' ({} frames, one morph target each) to the asset of {}",
-        rig.clip,
-        positions.len(),
-        rig.asset.path().display()
-    );
-    Ok(())
 }

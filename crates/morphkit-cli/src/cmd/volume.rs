@@ -13,17 +13,23 @@
 //!   volume term on the interior's tetrahedra and the lattice's shell (issue 40).
 //! - `--anchor auto|x,y,z[,size]`: a small stiff cube inside the base whose vertices are the
 //!   boundary conditions; the result follows its slerp-interpolated rigid motion.
+//!
+//! A mode of `blend`'s one-way stack (see [`super::blend`]): inputs (an [`Input`], read by
+//! the common step) → the volumetric solve → frames, with the side outputs of
+//! [`super::blend_outputs`]; it imports nothing above those.
 
-use super::blend::{report_jumps, unconverged_path, weights_json, write_region, BlendArgs};
+use super::blend_args::BlendArgs;
+use super::blend_inputs::Input;
+use super::blend_outputs::{
+    mark_failed, report_jumps, unconverged_path, weights_json, write_region,
+};
 use crate::outputs::Outputs;
 use crate::util::progress;
 use anyhow::{bail, Context};
 use morphkit::io::{self, FramesOptions};
-use morphkit::mesh::{ShapeSet, Topology, Weld};
+use morphkit::mesh::{ShapeSet, Topology};
 use morphkit::springs::interior::VolumeResult;
-use morphkit::springs::{
-    blend_metrics, AnchorOptions, BlendOptions, InteriorOptions, VolumetricBlend, Weights,
-};
+use morphkit::springs::{blend_metrics, AnchorOptions, InteriorOptions, VolumetricBlend};
 use serde_json::json;
 use std::time::Instant;
 
@@ -45,16 +51,10 @@ pub fn requested(a: &BlendArgs) -> bool {
     a.anchor.is_some() || a.interior.trim() != "none"
 }
 
-/// Runs the volumetric blend of `morphkit blend` and writes its outputs.
-pub fn run(
-    a: &BlendArgs,
-    (shapes, weld): (&ShapeSet, &Weld),
-    weights: &[Weights],
-    options: &BlendOptions,
-    threads: usize,
-    start: Instant,
-    mut outputs: Outputs,
-) -> anyhow::Result<()> {
+/// Runs the volumetric blend of `morphkit blend` on `input` and writes its outputs.
+pub(super) fn run(a: &BlendArgs, input: &Input, mut outputs: Outputs) -> anyhow::Result<()> {
+    let (shapes, weld, weights) = (&input.shapes, &input.weld, &input.weights[..]);
+    let (options, threads, start) = (&input.options, input.threads, input.start);
     if a.linear {
         bail!("--linear blends without springs; it cannot be combined with --interior or --anchor");
     }
@@ -95,7 +95,7 @@ pub fn run(
         r.positions = weld.scatter(&r.positions);
         if !r.stats.converged {
             unconverged.push(k);
-            super::blend::mark_failed(&mut failed, weld, &r.stats.unconverged_vertices);
+            mark_failed(&mut failed, weld, &r.stats.unconverged_vertices);
         }
         worst_tets = worst_tets.max(r.inversions.tetrahedra);
         worst_tris = worst_tris.max(r.inversions.triangles);
