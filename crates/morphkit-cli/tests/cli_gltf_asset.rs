@@ -181,6 +181,7 @@ fn blend_rig_adds_the_physical_animation_to_the_asset() {
         s(&input),
         "--animation",
         "Wave",
+        "--per-frame-targets",
         "--out",
         s(&d.join("x.glb")),
     ]);
@@ -195,6 +196,7 @@ fn blend_rig_adds_the_physical_animation_to_the_asset() {
         s(&input),
         "--animation",
         "Wave",
+        "--per-frame-targets",
         "--out",
         s(&out),
     ]);
@@ -248,6 +250,7 @@ fn blend_rig_adds_the_physical_animation_to_the_asset() {
         s(&named),
         "--fps",
         "2",
+        "--per-frame-targets",
         "--out",
         s(&out2),
     ]);

@@ -37,8 +37,11 @@ vertices are written, coloured red, to OUT-unconverged.ply beside the output.
 named morph targets and weights animation (--animation NAME|INDEX when several; or --weights-file,
 whose CSV header row names targets) drive the blend, and a .glb/.gltf OUT is the same asset
 (materials, textures, skins, other meshes, transforms, animations kept) with one more
-animation, NAME-physical, keying one new morph target per frame at the keys' times. More frames
-than --max-targets (default 200, what WebGL2 viewers play) is refused before any solve.";
+animation, NAME-physical, keyed at the keys' times: the asset's own targets at the clip's weights
+plus a few corrective targets, the basis of the physical-minus-linear residual within
+--clip-tolerance (1e-3 of the diagonal) in every frame; --per-frame-targets keys one new morph
+target per frame instead (more frames than --max-targets, default 200, what WebGL2 viewers play,
+is then refused before any solve).";
 
 /// Fewest frames for which a blend computes reference factors (fewer never pay them back).
 const REFERENCE_MIN_FRAMES: usize = 4;
@@ -211,6 +214,17 @@ pub struct BlendArgs {
     /// file that is not such a cache (does not start with MKINTER) is refused, never replaced.
     #[arg(long, requires = "interactive")]
     pub interactive_cache: Option<PathBuf>,
+    /// With --rig and a .glb/.gltf --out: the compact clip's largest vertex error in any frame,
+    /// as a fraction of the base's bounding-box diagonal (default 1e-3,
+    /// `morphkit::clip::DEFAULT_TOLERANCE`). The clip plays the asset's own targets at its
+    /// weights plus as few corrective targets (with weight tracks) as bring every frame within
+    /// it.
+    #[arg(long, conflicts_with = "per_frame_targets")]
+    pub clip_tolerance: Option<f64>,
+    /// With --rig and a .glb/.gltf --out: one morph target per frame (each frame exact as f32,
+    /// one target per frame) instead of the compact clip.
+    #[arg(long)]
+    pub per_frame_targets: bool,
 }
 
 /// `--threads`, by default the machine's cores, clamped to 1..=64.

@@ -36,7 +36,13 @@ pub(super) fn run(a: &BlendArgs, input: Input, mut outputs: Outputs) -> anyhow::
     let solved = surface.solve(a, &input, |k, positions| frames.push(k, positions))?;
     let regions = solved.warn(&mut outputs, a, &input)?;
     let write_seconds = frames.write(&mut outputs, a, &input)?;
-    surface.report(&mut outputs, a, &input, (&solved, &regions), write_seconds)?;
+    surface.report(
+        &mut outputs,
+        a,
+        &input,
+        (&solved, &regions),
+        (write_seconds, None),
+    )?;
     finish(outputs, a, &input)
 }
 

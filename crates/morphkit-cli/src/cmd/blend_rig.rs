@@ -117,7 +117,22 @@ pub(super) fn read(a: &BlendArgs, path: &Path) -> anyhow::Result<(Rig, ShapeSet)
     if carries(&a.out) {
         crate::outputs::check_asset_flags(&a.out)?;
         asset.set_max_targets(crate::outputs::asset_max_targets());
-        asset.check_frame_animation(&clip, &times, weights.len())?;
+        if a.per_frame_targets {
+            asset.check_frame_animation(&clip, &times, weights.len())?;
+        } else {
+            // The compact clip's correctives are counted once the residual is known.
+            asset.check_clip_keys(&clip, &times, weights.len())?;
+            asset.check_room(0)?;
+            let (have, max) = (asset.morphs().targets.len(), asset.max_targets());
+            if !a.linear && max != 0 && have >= max {
+                bail!(
+                    "{}: the mesh has {have} morph targets, and --max-targets {max} leaves no room \
+                     for the compact clip's corrective targets; allow more (--max-targets 0) or \
+                     give --per-frame-targets (which needs room too)",
+                    path.display()
+                );
+            }
+        }
     }
     let rig = Rig {
         asset,

@@ -5,9 +5,10 @@
 //!
 //! [`write()`] receives everything a clip may be made from, in a [`RigFrames`]: the rig (asset,
 //! per-frame weights and times, clip name), the solved frames, the shapes and the arguments.
-//! Each kind of clip is a function of its own ([`add_physical_clip`] today: one morph target
-//! per frame); a new kind (say, corrective targets from each frame's residual against the
-//! linear blend, [`RigFrames::linear`]) is another such function called from [`write()`].
+//! Each kind of clip is a function of its own: [`add_compact_clip`] (the default: the asset's
+//! own targets at the clip's weights plus corrective targets spanning each frame's residual
+//! against the linear blend, [`RigFrames::linear`]; issue 56) and [`add_physical_clip`]
+//! (`--per-frame-targets`: one morph target per frame).
 //!
 //! A mode at the top of `blend`'s one-way stack (see [`super::blend`]); the rig's reader sits
 //! low in it (`blend_rig.rs`), since the common input step calls it. A `--rig` run whose
@@ -18,8 +19,11 @@ use super::blend_inputs::Input;
 use super::blend_rig::Rig;
 use super::blend_solve::{finish, Surface};
 use crate::outputs::Outputs;
+use anyhow::Context;
+use morphkit::clip::{self, ClipError};
 use morphkit::mesh::{Point, ShapeSet};
 use morphkit::springs::linear_blend;
+use serde_json::{json, Value};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -44,7 +48,6 @@ impl RigFrames<'_> {
     /// than a solve) rather than kept, so that the frames held until the write stay at one
     /// copy, as the `--max-memory` estimate counts them. `positions[k] − linear(k)` is the
     /// physical correction of frame `k`.
-    #[allow(dead_code)] // The compact clip's writer is its first user.
     pub fn linear(&self, k: usize) -> anyhow::Result<Vec<Point>> {
         Ok(linear_blend(self.shapes, &self.rig.weights[k])?)
     }
@@ -72,38 +75,124 @@ pub(super) fn run(
         shapes: &input.shapes,
         args: a,
     };
-    write(&mut outputs, frames, &input.inputs)?;
+    let clip = write(&mut outputs, frames, &input.inputs)?;
     let write_seconds = t_write.elapsed().as_secs_f64();
-    surface.report(&mut outputs, a, &input, (&solved, &regions), write_seconds)?;
+    let timing = (write_seconds, Some(clip));
+    surface.report(&mut outputs, a, &input, (&solved, &regions), timing)?;
     finish(outputs, a, &input)
 }
 
-/// The output step of `--rig`: adds the clips to the rig's asset and stages it at `--out`
-/// (`inputs`: the input files, named in the asset's metadata). One clip today, the physical
-/// animation ([`add_physical_clip`]); another kind of clip is another function called here.
+/// The output step of `--rig`: adds the clip to the rig's asset and stages it at `--out`
+/// (`inputs`: the input files, named in the asset's metadata). Returns what the clip came to,
+/// for `--report`.
 pub(super) fn write(
     outputs: &mut Outputs,
     mut frames: RigFrames,
     inputs: &[PathBuf],
-) -> anyhow::Result<()> {
-    add_physical_clip(&mut frames)?;
+) -> anyhow::Result<Value> {
+    let summary = if frames.args.per_frame_targets {
+        add_physical_clip(&mut frames)?
+    } else {
+        add_compact_clip(&mut frames)?
+    };
     let rig = &frames.rig;
     outputs.gltf_asset(&frames.args.out, &rig.asset, inputs, frames.positions.len())?;
+    let how = match summary["corrective_targets"].as_u64() {
+        Some(k) => format!(
+            "the asset's {} targets at the clip's weights and {k} corrective targets, within {:.2e} of the diagonal",
+            summary["asset_targets"], summary["max_error"].as_f64().unwrap_or(f64::NAN)
+        ),
+        None => "one morph target each".to_string(),
+    };
     eprintln!(
-        "added the animation '{}' ({} frames, one morph target each) to the asset of {}",
+        "added the animation '{}' ({} frames: {how}) to the asset of {}",
         rig.clip,
         frames.positions.len(),
         rig.asset.path().display()
     );
-    Ok(())
+    Ok(summary)
 }
 
 /// Adds the physical animation `rig.clip` to the asset: one new morph target per frame (its
 /// positions minus the base), keyed at the frame's time
 /// ([`morphkit::io::GltfAsset::add_frame_animation`]).
-fn add_physical_clip(frames: &mut RigFrames) -> anyhow::Result<()> {
+fn add_physical_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
     let rig = &mut frames.rig;
     rig.asset
         .add_frame_animation(&rig.clip, &rig.times, &frames.positions)?;
-    Ok(())
+    Ok(json!({ "kind": "per_frame_targets", "targets_added": frames.positions.len() }))
+}
+
+/// Adds the physical animation `rig.clip` compactly: the asset's own targets at the clip's
+/// weights, plus the fewest corrective targets ([`morphkit::clip::residual_basis`] of the
+/// frames' residuals against the linear blend) that bring every vertex of every frame within
+/// `--clip-tolerance` of the solve, as many as `--max-targets` leaves room for
+/// ([`morphkit::io::GltfAsset::add_compact_animation`]). The error reported is measured on
+/// what a viewer plays: the stored targets at the stored (f32) key weights.
+fn add_compact_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
+    let relative = frames
+        .args
+        .clip_tolerance
+        .unwrap_or(clip::DEFAULT_TOLERANCE);
+    let diagonal = frames.shapes.base().bbox_diagonal();
+    let n_targets = frames.shapes.len() - 1;
+    let mut residuals = Vec::with_capacity(frames.positions.len());
+    let mut weights = Vec::with_capacity(frames.positions.len());
+    for (k, p) in frames.positions.iter().enumerate() {
+        let linear = frames.linear(k)?;
+        residuals.push(
+            p.iter()
+                .zip(&linear)
+                .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+                .collect::<Vec<Point>>(),
+        );
+        let c = frames.rig.weights[k].coefficients(frames.shapes.len())?;
+        weights.push(c[1..=n_targets].to_vec());
+    }
+    let asset = &mut frames.rig.asset;
+    let have = asset.morphs().targets.len();
+    let room = match asset.max_targets() {
+        0 => usize::MAX,
+        m => m.saturating_sub(have),
+    };
+    let basis =
+        clip::residual_basis(&residuals, relative * diagonal, room).map_err(|e| match e {
+            ClipError::TooManyShapes { frame, error, .. } => anyhow::anyhow!(
+                "{}: the compact clip '{}' needs more corrective targets than the {room} that \
+             --max-targets leaves beside the asset's {have} (with {room}, frame {frame} is \
+             {:.2e} of the diagonal off); raise --clip-tolerance, allow more targets \
+             (--max-targets 0), or give --per-frame-targets",
+                asset.path().display(),
+                frames.rig.clip,
+                error / diagonal
+            ),
+            e => anyhow::anyhow!("{}: the compact clip: {e}", asset.path().display()),
+        })?;
+    asset.add_compact_animation(&frames.rig.clip, &frames.rig.times, &weights, &basis)?;
+    // What a viewer plays: the stored targets at the stored key weights.
+    let anim = asset
+        .weight_animation(Some(&frames.rig.clip))?
+        .context("the compact clip was not added")?;
+    let (mut worst, mut worst_frame) = (0.0f64, 0);
+    for (k, (_, w)) in anim.keys.iter().enumerate() {
+        let played = asset.morphs().evaluate(w);
+        let e = played
+            .iter()
+            .zip(&frames.positions[k])
+            .map(|(a, b)| {
+                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+            })
+            .fold(0.0, f64::max);
+        if e > worst {
+            (worst, worst_frame) = (e, k);
+        }
+    }
+    Ok(json!({
+        "kind": "compact",
+        "asset_targets": n_targets,
+        "corrective_targets": basis.shapes.len(),
+        "tolerance": relative,
+        "max_error": worst / diagonal,
+        "worst_frame": worst_frame,
+    }))
 }

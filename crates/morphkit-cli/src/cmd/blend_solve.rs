@@ -185,7 +185,7 @@ impl Surface {
         a: &BlendArgs,
         input: &Input,
         (solved, regions): (&Solved, &Regions),
-        write_seconds: f64,
+        (write_seconds, clip): (f64, Option<Value>),
     ) -> anyhow::Result<()> {
         let Some(r) = &a.report else {
             return Ok(());
@@ -214,6 +214,8 @@ impl Surface {
             "continuity": (!a.linear).then_some(&solved.continuity),
             "jump_region": regions.jumps_ply.as_ref().map(|p| p.display().to_string()),
             "timings": { "setup_seconds": self.setup_seconds, "write_seconds": write_seconds, "total_seconds": input.start.elapsed().as_secs_f64() },
+            // How a rig's physical clip was written (blend_rig_out.rs), when one was.
+            "clip": clip,
             "frames": solved.rows,
         });
         outputs.json(r, &report)

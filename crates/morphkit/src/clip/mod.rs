@@ -30,6 +30,11 @@ use faer::{Mat, Side};
 #[cfg(test)]
 mod tests;
 
+/// The default tolerance of a compact clip, as a fraction of the base's bounding-box diagonal:
+/// the largest vertex error of any frame (issue 56: within a viewer's pixel at any usual
+/// framing, and well under the physical correction, 1–5 % of the diagonal on a face clip).
+pub const DEFAULT_TOLERANCE: f64 = 1e-3;
+
 /// Why [`residual_basis`] refused its input.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum ClipError {
