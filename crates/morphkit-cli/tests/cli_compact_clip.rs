@@ -14,6 +14,7 @@ mod fixture;
 
 use common::split::diagonal;
 use common::*;
+use morphkit::geom::max_distance;
 use morphkit::io::{pc2, GltfAsset, GltfReadOptions};
 use morphkit::mesh::Point;
 use std::path::{Path, PathBuf};
@@ -22,15 +23,6 @@ use std::process::Command;
 /// The mesh with morph targets (gltfpack drops mesh names).
 fn body() -> GltfReadOptions {
     GltfReadOptions::default()
-}
-
-fn largest_distance(a: &[Point], b: &[Point]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| {
-            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-        })
-        .fold(0.0, f64::max)
 }
 
 /// The frames the animation `clip` of `path` plays at its keys, from the stored numbers.
@@ -73,7 +65,7 @@ fn a_compact_clip_plays_the_solve_within_its_tolerance() {
     assert!((1..=3).contains(&k), "{k} correctives for 3 frames");
     let mut worst: f64 = 0.0;
     for (g, w) in got.iter().zip(&want) {
-        worst = worst.max(largest_distance(g, w) / diag);
+        worst = worst.max(max_distance(g, w) / diag);
     }
     assert!(worst <= 1e-3, "{worst}");
     // The report's error is what a viewer plays (against the solve, not its f32 copy).
@@ -85,7 +77,7 @@ fn a_compact_clip_plays_the_solve_within_its_tolerance() {
     // The physical correction is real: the linear blend of the same weights is further off.
     let anim = a.weight_animation(Some("Wave")).unwrap().unwrap();
     let linear = a.morphs().evaluate(&anim.keys[2].1);
-    assert!(largest_distance(&linear, &want[2]) / diag > 10.0 * worst);
+    assert!(max_distance(&linear, &want[2]) / diag > 10.0 * worst);
     // A tighter tolerance takes as many correctives or more, and holds.
     let tight = d.join("tight.glb");
     let report2 = d.join("tight.json");
@@ -300,7 +292,7 @@ fn a_long_clip_of_many_targets_stays_small_from_a_packed_input() {
     let mut worst: f64 = 0.0;
     for (g, w) in got.iter().zip(&solved) {
         // The cache holds f32 positions: their rounding is far under the tolerance.
-        worst = worst.max(largest_distance(g, w) / diag);
+        worst = worst.max(max_distance(g, w) / diag);
     }
     assert!(worst <= 1e-3 + 1e-6, "{worst}");
     let clip = report_clip(&report);

@@ -176,13 +176,7 @@ fn add_compact_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
     let (mut worst, mut worst_frame) = (0.0f64, 0);
     for (k, (_, w)) in anim.keys.iter().enumerate() {
         let played = asset.morphs().evaluate(w);
-        let e = played
-            .iter()
-            .zip(&frames.positions[k])
-            .map(|(a, b)| {
-                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-            })
-            .fold(0.0, f64::max);
+        let e = morphkit::geom::max_distance(&played, &frames.positions[k]);
         if e > worst {
             (worst, worst_frame) = (e, k);
         }

@@ -3,6 +3,17 @@
 
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
+/// The largest distance between corresponding points of `a` and `b` (`#V` each; extra
+/// points of the longer are ignored); 0 for empty sets.
+pub fn max_distance(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| {
+            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+        })
+        .fold(0.0, f64::max)
+}
+
 /// Polar decomposition $D = R S$ with $R$ a rotation ($\det R = +1$) and $S$ symmetric
 /// (Shoemake & Duff 1992, used by Wang & Lee 2008 Sec. 3.2.2).
 ///

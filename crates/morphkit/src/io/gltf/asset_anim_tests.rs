@@ -3,6 +3,7 @@
 
 use super::{GltfAsset, GltfAssetOptions, GltfReadOptions};
 use crate::clip::residual_basis;
+use crate::geom::max_distance;
 use crate::mesh::Point;
 use std::path::PathBuf;
 
@@ -14,15 +15,6 @@ fn tmp(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-fn largest_distance(a: &[Point], b: &[Point]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| {
-            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-        })
-        .fold(0.0, f64::max)
 }
 
 #[test]
@@ -95,7 +87,7 @@ fn a_compact_clip_plays_the_frames_within_its_error() {
     for (k, (t, w)) in anim.keys.iter().enumerate() {
         assert_eq!(*t, times[k] as f32 as f64);
         let played = b.morphs().evaluate(w);
-        let e = largest_distance(&played, &frames[k]);
+        let e = max_distance(&played, &frames[k]);
         // The basis's error, and f32 storage of targets and weights.
         assert!(e <= basis.max_error + 1e-5 * diag, "frame {k}: {e}");
     }
