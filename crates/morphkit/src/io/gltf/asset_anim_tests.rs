@@ -7,8 +7,7 @@ use crate::geom::max_distance;
 use crate::mesh::Point;
 use std::path::PathBuf;
 
-#[path = "../../../tests/common/gltf_asset.rs"]
-mod fixture;
+use super::asset_tests::fixture;
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("morphkit-anim-{name}-{}", std::process::id()));

@@ -9,7 +9,7 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 #[path = "../../../tests/common/gltf_asset.rs"]
-mod fixture;
+pub(super) mod fixture;
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("morphkit-asset-{name}-{}", std::process::id()));
