@@ -36,6 +36,7 @@
 //! PC2), [`sparse`] (faer sparse Cholesky with symbolic reuse) and [`geom`] (small dense math).
 #![warn(missing_docs)]
 
+pub mod bake;
 pub mod clip;
 pub mod geom;
 pub mod io;

@@ -1,0 +1,278 @@
+//! Physical correctives baked into ordinary blendshapes (issue 56): a rig that a DCC or an
+//! engine plays live, at the cost of a linear blend, with the physical look.
+//!
+//! A [`BakedRig`] is what DCCs evaluate:
+//! - **In-between shapes** per target: the physical equilibrium of the target alone at weights
+//!   `k / (m + 1)`, `k = 1..=m`, and the target itself at 1 (exact: one-hot weights give the
+//!   shape's own numbers). A target's delta at weight `w` is piecewise linear between them (as
+//!   DCCs interpolate in-betweens), from 0 at `w = 0`; beyond `[0, 1]` the first and last
+//!   segments extend linearly.
+//! - **Combination shapes** per pair of targets that interact: the part of the pair's
+//!   equilibrium at `(½, ½)` that the two targets' in-betweens at ½ do not make,
+//!   `C_ij = P(½eᵢ + ½eⱼ) − base − Dᵢ(½) − Dⱼ(½)`, driven by a weight
+//!   [`BakedRig::combination_weight`] that is `4 wᵢ wⱼ` (1 at the sample) scaled down where other
+//!   targets are on: `4 wᵢ wⱼ · ((wᵢ + wⱼ) / Σₖ wₖ)^p` over the positive weights (`p` =
+//!   [`BakeOptions::damping`]). With two targets on, the plain product; with three equal ones,
+//!   each pair at `(2/3)^p` of it. Pair correctives fitted on pairs overshoot where three
+//!   targets meet (they correct the same shrinkage two or three times); the damping is the
+//!   simplest rule a driver can compute that makes the sum of the pair corrections behave like
+//!   one correction per region, and it changes nothing on pairs and singles.
+//!
+//! `evaluate(w) = base + Σᵢ Dᵢ(wᵢ) + Σ_{pairs} φᵢⱼ(w) Cᵢⱼ`, `#V` positions: a linear blend of
+//! stored shapes with weights computed from the sliders, which a glTF viewer (the mapping in
+//! `extras`), USD (`UsdSkelInbetweenShape`s) or Blender (drivers) can play.
+
+use crate::mesh::Point;
+use crate::springs::{BlendError, PhysicalBlend, Weights};
+
+#[cfg(test)]
+mod tests;
+
+/// How to bake.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakeOptions {
+    /// In-between shapes per target, at `k / (inbetweens + 1)` (default 7: the eighths, which
+    /// the interactive preparation also solves).
+    pub inbetweens: usize,
+    /// Pairs whose combination shape moves no vertex farther than this fraction of the base's
+    /// bounding-box diagonal are left out (default 1e-4).
+    pub pair_tolerance: f64,
+    /// Most combination shapes kept (those that move a vertex farthest first; default 120, so
+    /// that with 10 targets × 8 shapes a rig stays within the 200 targets WebGL2 plays).
+    pub max_pairs: usize,
+    /// The exponent `p` of the combination weights' damping (default 1; 0: the plain product).
+    pub damping: f64,
+}
+
+impl Default for BakeOptions {
+    fn default() -> Self {
+        Self {
+            inbetweens: 7,
+            pair_tolerance: 1e-4,
+            max_pairs: 120,
+            damping: 1.0,
+        }
+    }
+}
+
+/// One target's in-between shapes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakedTarget {
+    /// Increasing weights in `(0, 1]`, the last 1.
+    pub weights: Vec<f64>,
+    /// Per weight, `#V` displacements from the base.
+    pub deltas: Vec<Vec<Point>>,
+}
+
+/// A combination shape.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Combination {
+    /// The two targets (`i < j`, 0-based target indices).
+    pub targets: (usize, usize),
+    /// `#V` displacements at combination weight 1.
+    pub delta: Vec<Point>,
+}
+
+/// Baked physical correctives (see the [module documentation](self)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakedRig {
+    /// `#V` base positions.
+    pub base: Vec<Point>,
+    /// Per target of the rig, its in-betweens.
+    pub targets: Vec<BakedTarget>,
+    /// The pairs that interact.
+    pub combinations: Vec<Combination>,
+    /// The damping exponent of the combination weights.
+    pub damping: f64,
+}
+
+/// Why a bake failed.
+#[derive(Debug, thiserror::Error)]
+pub enum BakeError {
+    /// A solve failed.
+    #[error("the solve at weights {weights:?}: {source}")]
+    Solve {
+        /// The delta weights.
+        weights: Vec<f64>,
+        /// Why.
+        source: BlendError,
+    },
+    /// Options out of range.
+    #[error("{0}")]
+    Options(String),
+}
+
+/// `x` piecewise linear through `(0, 0)` and `(weights[k], deltas[k])`, extended linearly.
+fn piecewise(t: &BakedTarget, w: f64, out: &mut [Point]) {
+    if w == 0.0 || t.weights.is_empty() {
+        return;
+    }
+    // The segment [a, b] holding w (the first or last one outside [0, 1]).
+    let k = t
+        .weights
+        .iter()
+        .position(|&x| w <= x)
+        .unwrap_or(t.weights.len() - 1);
+    let (a, da) = if k == 0 {
+        (0.0, None)
+    } else {
+        (t.weights[k - 1], Some(&t.deltas[k - 1]))
+    };
+    let (b, db) = (t.weights[k], &t.deltas[k]);
+    let s = (w - a) / (b - a);
+    for (v, o) in out.iter_mut().enumerate() {
+        for c in 0..3 {
+            let lo = da.map_or(0.0, |d| d[v][c]);
+            o[c] += lo + s * (db[v][c] - lo);
+        }
+    }
+}
+
+impl BakedRig {
+    /// The weight of combination `c` at delta weights `w` (one per target): `4 wᵢ wⱼ ·
+    /// ((wᵢ + wⱼ) / Σₖ max(wₖ, 0))^p`, 0 when `wᵢ` or `wⱼ` is not positive.
+    pub fn combination_weight(&self, c: &Combination, w: &[f64]) -> f64 {
+        let (i, j) = c.targets;
+        let (a, b) = (w[i], w[j]);
+        if a <= 0.0 || b <= 0.0 {
+            return 0.0;
+        }
+        let total: f64 = w.iter().map(|x| x.max(0.0)).sum();
+        let share = ((a + b) / total).min(1.0);
+        4.0 * a * b * share.powf(self.damping)
+    }
+
+    /// The baked shape at delta weights `w` (one per target): `#V` positions, as a DCC
+    /// evaluates the in-betweens and combination shapes.
+    pub fn evaluate(&self, w: &[f64]) -> Vec<Point> {
+        let mut out = self.base.clone();
+        for (t, &x) in self.targets.iter().zip(w) {
+            piecewise(t, x, &mut out);
+        }
+        for c in &self.combinations {
+            let f = self.combination_weight(c, w);
+            if f != 0.0 {
+                for (o, d) in out.iter_mut().zip(&c.delta) {
+                    for k in 0..3 {
+                        o[k] += f * d[k];
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Shapes a client holds: in-betweens (the targets' own included) plus combinations.
+    pub fn num_shapes(&self) -> usize {
+        self.targets.iter().map(|t| t.weights.len()).sum::<usize>() + self.combinations.len()
+    }
+}
+
+fn sub(a: &[Point], b: &[Point]) -> Vec<Point> {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| [p[0] - q[0], p[1] - q[1], p[2] - q[2]])
+        .collect()
+}
+
+/// Bakes `solver`'s rig: `n × inbetweens` single-target solves and one solve per pair at
+/// `(½, ½)`, spread over `threads` threads (the result does not depend on the count). Positions
+/// are those of the solver's shapes (a welded rig's welded vertices).
+///
+/// Errors: a failed solve (naming its weights), `inbetweens` of 0 or a negative tolerance or
+/// damping.
+pub fn bake(
+    solver: &mut PhysicalBlend,
+    options: &BakeOptions,
+    threads: usize,
+) -> Result<BakedRig, BakeError> {
+    if options.inbetweens == 0
+        || !(options.pair_tolerance >= 0.0)
+        || !(options.damping >= 0.0 && options.damping.is_finite())
+    {
+        return Err(BakeError::Options(format!(
+            "in-betweens must be at least 1, the pair tolerance and the damping finite and not \
+             negative: {options:?}"
+        )));
+    }
+    let shapes = solver.shapes();
+    let n = shapes.len() - 1;
+    let base = shapes.positions(0).to_vec();
+    let diagonal = shapes.base().bbox_diagonal();
+    let m = options.inbetweens;
+    let steps: Vec<f64> = (1..=m).map(|k| k as f64 / (m + 1) as f64).collect();
+    let mut weights = Vec::new();
+    for t in 0..n {
+        for &a in &steps {
+            let mut w = vec![0.0; n];
+            w[t] = a;
+            weights.push(w);
+        }
+    }
+    let pairs: Vec<(usize, usize)> = (0..n)
+        .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
+        .collect();
+    for &(i, j) in &pairs {
+        let mut w = vec![0.0; n];
+        w[i] = 0.5;
+        w[j] = 0.5;
+        weights.push(w);
+    }
+    let as_weights: Vec<Weights> = weights.iter().map(|w| Weights::Delta(w.clone())).collect();
+    let mut solved = Vec::with_capacity(weights.len());
+    for (w, r) in weights.iter().zip(solver.solve_many(&as_weights, threads)) {
+        let r = r.map_err(|source| BakeError::Solve {
+            weights: w.clone(),
+            source,
+        })?;
+        solved.push(r.positions);
+    }
+    let shapes = solver.shapes();
+    let mut targets = Vec::with_capacity(n);
+    for t in 0..n {
+        let mut ws = steps.clone();
+        let mut deltas: Vec<Vec<Point>> = solved[t * m..(t + 1) * m]
+            .iter()
+            .map(|p| sub(p, &base))
+            .collect();
+        ws.push(1.0);
+        deltas.push(sub(shapes.positions(t + 1), &base));
+        targets.push(BakedTarget {
+            weights: ws,
+            deltas,
+        });
+    }
+    let mut rig = BakedRig {
+        base,
+        targets,
+        combinations: Vec::new(),
+        damping: options.damping,
+    };
+    let mut combos: Vec<(f64, Combination)> = Vec::new();
+    for (k, &(i, j)) in pairs.iter().enumerate() {
+        let mut w = vec![0.0; n];
+        w[i] = 0.5;
+        w[j] = 0.5;
+        // What the in-betweens alone make at (½, ½), without combinations.
+        let mut singles = rig.base.clone();
+        piecewise(&rig.targets[i], 0.5, &mut singles);
+        piecewise(&rig.targets[j], 0.5, &mut singles);
+        let delta = sub(&solved[n * m + k], &singles);
+        let size = crate::geom::max_distance(&delta, &vec![[0.0; 3]; delta.len()]);
+        if size > options.pair_tolerance * diagonal {
+            combos.push((
+                size,
+                Combination {
+                    targets: (i, j),
+                    delta,
+                },
+            ));
+        }
+    }
+    // The pairs that move a vertex farthest, then in pair order (a stable, total order).
+    combos.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.targets.cmp(&b.1.targets)));
+    combos.truncate(options.max_pairs);
+    combos.sort_by_key(|c| c.1.targets);
+    rig.combinations = combos.into_iter().map(|c| c.1).collect();
+    Ok(rig)
+}

@@ -1,0 +1,150 @@
+use super::*;
+use crate::geom::max_distance;
+use crate::mesh::generate::{bar, bend, rotate};
+use crate::springs::{linear_blend, BlendOptions};
+use crate::ShapeSet;
+
+/// A bar along x (length 2) with three targets: its far half bends 90° about z, its far half
+/// bends 90° about y, its tip turns 60° about x. Each pair overlaps at the far end.
+fn rig() -> ShapeSet {
+    let m = bar(2.0, 0.2, 2, 24);
+    let p = m.positions.clone();
+    let about_y: Vec<Point> = bend(
+        &p.iter().map(|q| [q[0], q[2], q[1]]).collect::<Vec<_>>(),
+        1.0,
+        1.0,
+        std::f64::consts::FRAC_PI_2,
+    )
+    .iter()
+    .map(|q| [q[0], q[2], q[1]])
+    .collect();
+    let twist: Vec<Point> = p
+        .iter()
+        .map(|&q| {
+            let s = ((q[0] - 1.2) / 0.8).clamp(0.0, 1.0);
+            rotate(&[q], [0.0; 3], [1.0, 0.0, 0.0], 60f64.to_radians() * s)[0]
+        })
+        .collect();
+    let targets = vec![
+        ("rest".to_string(), p.clone()),
+        (
+            "bend_z".to_string(),
+            bend(&p, 1.0, 1.0, std::f64::consts::FRAC_PI_2),
+        ),
+        ("bend_y".to_string(), about_y),
+        ("twist".to_string(), twist),
+    ];
+    ShapeSet::new(m, targets).unwrap()
+}
+
+fn solve(s: &mut PhysicalBlend, w: &[f64]) -> Vec<Point> {
+    s.solve(&Weights::Delta(w.to_vec())).unwrap().positions
+}
+
+#[test]
+fn a_bake_is_the_solve_at_its_samples_and_the_targets_at_one() {
+    let shapes = rig();
+    let mut s = PhysicalBlend::new(&shapes, &BlendOptions::default()).unwrap();
+    let opts = BakeOptions {
+        inbetweens: 3,
+        ..BakeOptions::default()
+    };
+    let b = bake(&mut s, &opts, 2).unwrap();
+    assert_eq!(b.targets.len(), 3);
+    assert!(b
+        .targets
+        .iter()
+        .all(|t| t.weights == [0.25, 0.5, 0.75, 1.0]));
+    let diag = shapes.base().bbox_diagonal();
+    // At one-hot weights: the target's own numbers.
+    for t in 0..3 {
+        let mut w = vec![0.0; 3];
+        w[t] = 1.0;
+        let e = b.evaluate(&w);
+        assert!(max_distance(&e, shapes.positions(t + 1)) <= 1e-12 * diag);
+        for a in [0.25, 0.5, 0.75] {
+            w[t] = a;
+            let e = max_distance(&b.evaluate(&w), &solve(&mut s, &w));
+            assert!(e <= 1e-12 * diag, "target {t} at {a}: {e}");
+        }
+    }
+    // Every pair interacts here, and at (½, ½) the bake is the pair's equilibrium.
+    assert_eq!(b.combinations.len(), 3);
+    for c in &b.combinations {
+        let mut w = vec![0.0; 3];
+        w[c.targets.0] = 0.5;
+        w[c.targets.1] = 0.5;
+        assert_eq!(b.combination_weight(c, &w), 1.0);
+        let e = max_distance(&b.evaluate(&w), &solve(&mut s, &w));
+        assert!(e <= 1e-12 * diag, "{:?}: {e}", c.targets);
+    }
+    // The same bake whatever the thread count.
+    let mut s1 = PhysicalBlend::new(&shapes, &BlendOptions::default()).unwrap();
+    assert_eq!(bake(&mut s1, &opts, 1).unwrap(), b);
+}
+
+#[test]
+fn combination_weights_are_the_product_for_two_and_damped_for_more() {
+    let c = Combination {
+        targets: (0, 1),
+        delta: Vec::new(),
+    };
+    let mut b = BakedRig {
+        base: Vec::new(),
+        targets: Vec::new(),
+        combinations: Vec::new(),
+        damping: 1.0,
+    };
+    assert_eq!(b.combination_weight(&c, &[0.0, 0.7, 0.3]), 0.0);
+    assert_eq!(b.combination_weight(&c, &[-0.2, 0.7, 0.0]), 0.0);
+    assert!((b.combination_weight(&c, &[0.5, 0.25, 0.0]) - 0.5).abs() < 1e-15);
+    // A third target of equal weight: 2/3 of the product at p = 1, 4/9 at p = 2.
+    assert!((b.combination_weight(&c, &[0.5, 0.5, 0.5]) - 2.0 / 3.0).abs() < 1e-15);
+    b.damping = 2.0;
+    assert!((b.combination_weight(&c, &[0.5, 0.5, 0.5]) - 4.0 / 9.0).abs() < 1e-15);
+    b.damping = 0.0;
+    assert!((b.combination_weight(&c, &[0.5, 0.5, 0.5]) - 1.0).abs() < 1e-15);
+}
+
+#[test]
+fn between_samples_and_in_combinations_the_bake_is_closer_than_the_linear_blend() {
+    let shapes = rig();
+    let mut s = PhysicalBlend::new(&shapes, &BlendOptions::default()).unwrap();
+    let b = bake(&mut s, &BakeOptions::default(), 2).unwrap();
+    let states: Vec<Vec<f64>> = vec![
+        vec![0.3, 0.0, 0.0],
+        vec![0.0, 0.55, 0.0],
+        vec![0.0, 0.0, 0.9],
+        vec![0.7, 0.4, 0.0],
+        vec![0.0, 0.6, 0.8],
+        vec![0.6, 0.5, 0.7],
+        vec![0.9, 0.9, 0.4],
+    ];
+    for w in &states {
+        let solved = solve(&mut s, w);
+        let baked = max_distance(&b.evaluate(w), &solved);
+        let linear = max_distance(
+            &linear_blend(&shapes, &Weights::Delta(w.clone())).unwrap(),
+            &solved,
+        );
+        assert!(baked < linear, "{w:?}: baked {baked}, linear {linear}");
+    }
+}
+
+#[test]
+fn bad_options_are_refused() {
+    let shapes = rig();
+    let mut s = PhysicalBlend::new(&shapes, &BlendOptions::default()).unwrap();
+    for o in [
+        BakeOptions {
+            inbetweens: 0,
+            ..BakeOptions::default()
+        },
+        BakeOptions {
+            damping: f64::NAN,
+            ..BakeOptions::default()
+        },
+    ] {
+        assert!(matches!(bake(&mut s, &o, 1), Err(BakeError::Options(_))));
+    }
+}
