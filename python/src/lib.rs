@@ -15,6 +15,7 @@ mod metrics;
 mod predictor;
 mod rig_io;
 mod scene;
+mod stop;
 mod synth;
 mod transfer;
 mod transfer_options;
