@@ -40,6 +40,7 @@ fn _morphkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(synth::geodesic_distance, m)?)?;
     m.add_function(wrap_pyfunction!(synth::synthesize, m)?)?;
     m.add_function(wrap_pyfunction!(transfer_options::transfer_defaults, m)?)?;
+    m.add_function(wrap_pyfunction!(transfer_options::rig_defaults, m)?)?;
     m.add_class::<synth::PyPartitions>()?;
     m.add_class::<blend::PyPhysicalBlend>()?;
     m.add_class::<blend::PyPredictor>()?;
