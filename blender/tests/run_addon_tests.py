@@ -383,7 +383,13 @@ render("transfer", dog)
 check(bpy.ops.morphkit.transfer_rig() == {"FINISHED"}, "transfer_rig failed")
 names = [k.name for k in dog.data.shape_keys.key_blocks]
 check(all(f"run{i}" in names for i in range(4)), f"rig keys {names}")
-rig_ref = morphkit.RigTransfer(CS, CFb, DT, DFb, corr).transfer_many(run)
+# The rig transfer is `morphkit rig`'s: its correspondence refined as the library's rig
+# default says (off), not as the animation transfer's (issue 55).
+rig_defaults = morphkit.rig_defaults()
+check(scene.morphkit_rig_refine == rig_defaults["refine"], "the panel's rig refine default is not the library's")
+rig_corr = morphkit.Correspondence.from_markers(CS, CFb, DT, DFb, pairs, refine=rig_defaults["refine"])
+check(rig_corr.refined == rig_defaults["refine"], "the rig correspondence's refinement")
+rig_ref = morphkit.RigTransfer(CS, CFb, DT, DFb, rig_corr).transfer_many(run)
 err = max(
     float(np.abs(geometry.key_coords(dog.data.shape_keys.key_blocks[f"run{i}"]) - rig_ref[i]).max())
     for i in range(4)

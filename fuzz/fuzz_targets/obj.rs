@@ -3,6 +3,13 @@
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 
+#[path = "limit.rs"]
+mod limit;
+
+/// The harness's memory limit (`limit.rs`): an allocation past it aborts, a crash.
+#[global_allocator]
+static ALLOC: limit::Limited = limit::Limited;
+
 fuzz_target!(|data: &[u8]| {
     if let Ok(mesh) = morphkit::io::obj::parse_obj(Path::new("fuzz.obj"), data) {
         let _ = morphkit::mesh::validate(&mesh);

@@ -3,6 +3,13 @@
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 
+#[path = "limit.rs"]
+mod limit;
+
+/// The harness's memory limit (`limit.rs`): an allocation past it aborts, a crash.
+#[global_allocator]
+static ALLOC: limit::Limited = limit::Limited;
+
 fuzz_target!(|data: &[u8]| {
     let _ = morphkit::io::pc2::parse_pc2(Path::new("fuzz.pc2"), data);
 });

@@ -7,7 +7,8 @@
 //! another's solve. What the properties read (`num_targets`, `summary`, the predictor) is set
 //! at construction, and `last_stats` has its own small lock, so they answer at once while a
 //! solve runs. `solve_many` solves in chunks and checks for signals between them, so that
-//! Ctrl-C interrupts a long batch (see [`solve_in_chunks`]).
+//! Ctrl-C interrupts a long batch (see [`solve_in_chunks`]); the interactive preparation
+//! checks between its solves ([`with_signal_checks`]).
 
 use crate::args;
 use crate::arrays::{to_array, to_array3};
@@ -16,6 +17,7 @@ pub use crate::blend_args::{fixed_vertices, shape_set, volume_options, weight_ro
 use crate::dict::to_dict;
 use crate::errors::{chain, new_err, IntoPyResult, Kind};
 pub use crate::predictor::PyPredictor;
+use crate::stop::with_signal_checks;
 use crate::weld::{shape_weld, unweld_frame, unweld_stats, weld_fixed};
 use morphkit::mesh::Weld;
 use morphkit::springs::{
@@ -126,17 +128,17 @@ impl PyPhysicalBlend {
         refine: usize,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let weld = self.weld.as_deref();
-        let positions = py
-            .detach(|| {
-                let mut solver = lock(&self.inner);
-                let Solver::Surface(b) = &mut *solver else {
-                    return Err(not_surface());
-                };
-                let r = b.solve_interactive(w, refine)?;
-                *lock(&self.last) = Some(unweld_stats(weld, r.stats));
-                Ok(unweld_frame(weld, r.positions, w, self.targets + 1))
-            })
-            .py(Kind::Blend)?;
+        let positions = with_signal_checks(py, |stop| {
+            let mut solver = lock(&self.inner);
+            let Solver::Surface(b) = &mut *solver else {
+                return Err(not_surface());
+            };
+            // A first interactive solve prepares the space (on one thread): Ctrl-C stops it.
+            b.prepare_interactive_until(1, stop)?;
+            let r = b.solve_interactive(w, refine)?;
+            *lock(&self.last) = Some(unweld_stats(weld, r.stats));
+            Ok(unweld_frame(weld, r.positions, w, self.targets + 1))
+        })?;
         Ok(to_array(py, &positions))
     }
 }
@@ -340,7 +342,9 @@ impl PyPhysicalBlend {
     /// damaged file, or one of another rig or options, is replaced; a file that is not such a
     /// cache raises BlendError and is left as it is). Returns a dict: ``snapshots``,
     /// ``unconverged``, ``seconds`` (this call), ``loaded`` (from the cache), ``replaced`` (why
-    /// a cache file there was not used, or None). Only for surface blends.
+    /// a cache file there was not used, or None). Only for surface blends. Ctrl-C
+    /// (`KeyboardInterrupt`) stops it between two solves: nothing is prepared, no cache
+    /// written.
     #[pyo3(signature = (*, threads=None, cache=None),
         text_signature = "($self, *, threads=1, cache=None)")]
     fn prepare_interactive<'py>(
@@ -350,33 +354,31 @@ impl PyPhysicalBlend {
         cache: Option<std::path::PathBuf>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let threads = args::opt_count("threads", threads, Kind::Blend, 1)?.unwrap_or(1);
-        let report = py
-            .detach(|| {
-                let started = std::time::Instant::now();
-                let mut solver = lock(&self.inner);
-                let Solver::Surface(b) = &mut *solver else {
-                    return Err(not_surface());
-                };
-                let used = match &cache {
-                    Some(path) => b.prepare_interactive_cached(threads, path)?,
-                    None => {
-                        b.prepare_interactive(threads);
-                        InteractiveCacheUse {
-                            loaded: false,
-                            replaced: None,
-                        }
+        let report = with_signal_checks(py, |stop| {
+            let started = std::time::Instant::now();
+            let mut solver = lock(&self.inner);
+            let Solver::Surface(b) = &mut *solver else {
+                return Err(not_surface());
+            };
+            let used = match &cache {
+                Some(path) => b.prepare_interactive_cached_until(threads, path, stop)?,
+                None => {
+                    b.prepare_interactive_until(threads, stop)?;
+                    InteractiveCacheUse {
+                        loaded: false,
+                        replaced: None,
                     }
-                };
-                let space = b.interactive_space().expect("prepared above");
-                Ok(serde_json::json!({
-                    "snapshots": space.len(),
-                    "unconverged": space.unconverged,
-                    "seconds": started.elapsed().as_secs_f64(),
-                    "loaded": used.loaded,
-                    "replaced": used.replaced,
-                }))
-            })
-            .py(Kind::Blend)?;
+                }
+            };
+            let space = b.interactive_space().expect("prepared above");
+            Ok(serde_json::json!({
+                "snapshots": space.len(),
+                "unconverged": space.unconverged,
+                "seconds": started.elapsed().as_secs_f64(),
+                "loaded": used.loaded,
+                "replaced": used.replaced,
+            }))
+        })?;
         to_dict(py, &report)
     }
 

@@ -15,6 +15,7 @@ mod metrics;
 mod predictor;
 mod rig_io;
 mod scene;
+mod stop;
 mod synth;
 mod transfer;
 mod transfer_options;
@@ -39,6 +40,7 @@ fn _morphkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(synth::geodesic_distance, m)?)?;
     m.add_function(wrap_pyfunction!(synth::synthesize, m)?)?;
     m.add_function(wrap_pyfunction!(transfer_options::transfer_defaults, m)?)?;
+    m.add_function(wrap_pyfunction!(transfer_options::rig_defaults, m)?)?;
     m.add_class::<synth::PyPartitions>()?;
     m.add_class::<blend::PyPhysicalBlend>()?;
     m.add_class::<blend::PyPredictor>()?;

@@ -6,6 +6,7 @@
 
 use crate::dict::to_dict;
 use crate::errors::{new_err, Kind};
+use morphkit::transfer::rig::RigOptions;
 use morphkit::transfer::{
     CorrespondenceOptions, GradientCombine, GradientFrame, TransferOptions, TranslationMode,
     TriangleWeighting,
@@ -121,5 +122,25 @@ fn transfer_json(opts: &TransferOptions) -> serde_json::Value {
 pub fn transfer_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
     let mut v = transfer_json(&TransferOptions::default());
     v["refine"] = CorrespondenceOptions::default().refine.is_some().into();
+    to_dict(py, &v)
+}
+
+/// The library's defaults of a rig transfer (`morphkit rig`), as keyword values: `refine`, the
+/// closest-point refinement of the rig's correspondence from markers
+/// ([`RigOptions::correspondence`]: off, unlike `transfer`'s), and the [`RigOptions::default`]
+/// transfer options `RigTransfer` uses (`combine`, `local_stretch`, `area_weighted`,
+/// `fold_guard`; a rig has no root motion, so no `translation`). A client that computes a rig's
+/// correspondence (the Blender add-on) takes `refine` from here, so that it moves the rig
+/// as `morphkit rig` does.
+///
+/// >>> morphkit.rig_defaults()["refine"]
+/// False
+#[pyfunction]
+pub fn rig_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    let mut v = transfer_json(&RigOptions::default().transfer);
+    if let Some(o) = v.as_object_mut() {
+        o.remove("translation");
+    }
+    v["refine"] = RigOptions::correspondence().refine.is_some().into();
     to_dict(py, &v)
 }

@@ -149,3 +149,26 @@ def test_write_animation_into_a_template_adds_a_clip(tmp_path):
     np.testing.assert_array_equal(V2, V)
     with pytest.raises(morphkit.MeshError, match="faces are needed"):
         morphkit.write_animation(tmp_path / "y.glb", frames)
+
+
+def test_read_rig_reads_a_split_frame_sequence_as_what_it_is(tmp_path):
+    """450 frames written to a .glb are split into meshes of at most 200 targets (what WebGL2
+    viewers play); read_rig gives all 449 targets, one weight per target and one key and one
+    time per frame, so the README's recipe gets consistent arrays (issue 55)."""
+    from conftest import bend, tube
+
+    V, F = tube(rings=4, around=6)
+    frames = np.stack([bend(V, 1e-3 + 2.0 * k / 449) for k in range(450)])
+    morphkit.write_animation(tmp_path / "long.glb", frames, F, fps=24.0)
+    rig = morphkit.read_rig(tmp_path / "long.glb")
+    assert rig["targets"].shape == (449, len(V), 3)
+    assert rig["weights"].shape == (450, 449)
+    assert rig["times"].shape == (450,)
+    np.testing.assert_allclose(rig["times"], np.arange(450) / 24.0, atol=1e-5)
+    # Key k shows frame k: the weights blend the targets back into the frames.
+    linear = rig["base"] + np.einsum("kt,tvi->kvi", rig["weights"], rig["targets"] - rig["base"])
+    assert np.abs(linear - frames).max() < 1e-5
+    # Adding a clip to the split sequence is refused, naming the file and what it is.
+    with pytest.raises(morphkit.FileError, match=r"long\.glb.*frame sequence morphkit split into 3 meshes"):
+        morphkit.write_animation(tmp_path / "x.glb", frames[:2], template=tmp_path / "long.glb")
+    assert not (tmp_path / "x.glb").exists()

@@ -118,6 +118,10 @@ def test_keyword_defaults_are_the_library_defaults():
     markers = [[k, k] for k in range(0, len(V), 7)]
     assert morphkit.Correspondence.from_markers(V, F, V, F, markers).refined == d["refine"]
     assert not morphkit.Correspondence.from_markers(V, F, V, F, markers, refine=False).refined
+    # A rig's defaults are `morphkit rig`'s: an unrefined correspondence, the world frame.
+    r = morphkit.rig_defaults()
+    assert set(r) == {"refine", "combine", "local_stretch", "area_weighted", "fold_guard"}
+    assert not r["refine"] and not r["local_stretch"] and not r["area_weighted"]
 
 
 def test_cat_dog_equals_the_cli(tmp_path, cli, cat_dog):

@@ -176,3 +176,45 @@ fn obj_line_breaks_are_read_and_kept() {
     assert!(back.contains("\r\n"));
     assert_eq!(back.matches('\n').count(), back.matches("\r\n").count());
 }
+
+/// A 450-frame `.glb` that `blend` wrote (split into meshes of 200 targets) is read by
+/// `blend --rig` as what it is: 449 targets and one key per frame, so a blend of it to frames
+/// works; into the `.glb` itself (an edit of the split rig) it is refused, naming the file and
+/// saying it is a split frame sequence, before any solve.
+#[test]
+fn a_split_frame_sequence_is_read_whole_by_blend_rig() {
+    let d = demo("probe55-split");
+    let long = d.join("long.glb");
+    ok(&strs(&blend_demo(
+        &d,
+        &["--frames", "450", "--linear", "--out", s(&long)],
+    )));
+    let pc2 = d.join("again.pc2");
+    ok(&["blend", "--rig", s(&long), "--linear", "--out", s(&pc2)]);
+    let back = morphkit::io::read_animation(&pc2, Some(&d.join("base.obj"))).unwrap();
+    let sequence = morphkit::io::read_animation(&long, None).unwrap();
+    assert_eq!(back.len(), 450, "one frame per key");
+    let tol = 1e-6 * sequence.base().bbox_diagonal();
+    for k in 0..450 {
+        let e = back
+            .positions(k)
+            .iter()
+            .zip(sequence.positions(k))
+            .flat_map(|(p, q)| (0..3).map(move |i| (p[i] - q[i]).abs()))
+            .fold(0.0, f64::max);
+        assert!(e < tol, "frame {k}: {e}");
+    }
+    let e = fails(&[
+        "blend",
+        "--rig",
+        s(&long),
+        "--linear",
+        "--out",
+        s(&d.join("x.glb")),
+    ]);
+    assert!(
+        e.contains("long.glb") && e.contains("frame sequence morphkit split into 3 meshes"),
+        "{e}"
+    );
+    assert!(!d.join("x.glb").exists());
+}

@@ -120,14 +120,14 @@ pub mod tether;
 pub mod weights;
 mod workspace;
 
-pub use blender::{blend, InteractiveCacheUse, PhysicalBlend};
+pub use blender::{blend, PhysicalBlend};
 pub use constraints::{
     stretched_vertices, thin_bands, AlignedComponent, Components, Constraints, FixedVertices, Gauge,
 };
 pub use continuity::{sequence_continuity, Continuity, ContinuityCheck, Jump, JUMP_BOUND};
 pub(crate) use frame_solver::report_lost;
 pub use frame_solver::FrameSolver;
-pub use interactive::InteractiveSpace;
+pub use interactive::{InteractiveCacheUse, InteractiveSpace};
 pub use interior::{
     AnchorOptions, AnchorPlacement, InteriorMode, InteriorOptions, SurfacePredictor,
     VolumetricBlend,
@@ -304,6 +304,13 @@ pub enum BlendError {
     Diverged {
         /// Newton iteration at which it happened.
         iteration: usize,
+    },
+    /// The caller's stop hook ended a long computation before its end (Ctrl-C in Python;
+    /// [`PhysicalBlend::prepare_interactive_until`]): nothing of it was kept or written.
+    #[error("{what} was stopped before its end; nothing of it was kept or written")]
+    Stopped {
+        /// What was stopped.
+        what: String,
     },
 }
 

@@ -61,7 +61,9 @@ pub struct GltfWeightAnimation {
     /// Its name, when it has one.
     pub name: Option<String>,
     /// The keys of its first channel driving the mesh: `(time in seconds, one weight per
-    /// target)`, in time order (the values of `CUBICSPLINE` keys).
+    /// target)`, in time order (the values of `CUBICSPLINE` keys). Of a rig morphkit split
+    /// into several meshes, the keys of every part, one weight per target of the whole rig
+    /// (as [`GltfAsset::morphs`] holds them).
     pub keys: Vec<(f64, Vec<f64>)>,
 }
 
@@ -151,6 +153,15 @@ fn scan(path: &Path, s: Scan) -> Result<Found, IoError> {
             shared: false,
             values,
         });
+    }
+    // A rig morphkit split into meshes (a long animation) is read as the one rig it is: its
+    // animations' keys span every target, as `morphs` does, not the first window's.
+    for a in &mut animations {
+        if let Some(keys) =
+            super::read_chunks::split_animation_keys(path, s.doc, s.data, s.mesh.index(), a.index)?
+        {
+            a.keys = keys;
+        }
     }
     // A sampler also used by a channel that is not ours (another mesh's weights).
     for w in &mut samplers {
@@ -522,10 +533,20 @@ impl GltfAsset {
     /// says what to do.
     pub fn check_room(&self, new: usize) -> Result<(), IoError> {
         if self.split {
+            let meshes = self.doc["meshes"].as_array().map_or(0, |m| {
+                m.iter()
+                    .filter(|m| m["extras"]["morphkitTargets"].is_array())
+                    .count()
+            });
             return Err(IoError::content(
                 &self.path,
-                "the mesh is part of a rig morphkit split into several meshes (extras.morphkitTargets); \
-                 it can be carried (convert) but not edited; write the rig as frames and blend those",
+                format!(
+                    "a frame sequence morphkit split into {meshes} meshes (a long animation, \
+                     extras.morphkitTargets), whose {} morph targets it reads as one rig: it can \
+                     be read and carried (convert) but not edited (new targets or animations); \
+                     write it unsplit (--max-targets 0) or write the frames to .pc2, OBJ or USD",
+                    self.morphs.targets.len()
+                ),
             ));
         }
         let have = self.morphs.targets.len();

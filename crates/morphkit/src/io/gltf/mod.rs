@@ -203,3 +203,5 @@ mod asset_tests;
 mod hardening_tests;
 #[cfg(test)]
 mod read_tests;
+#[cfg(test)]
+mod split_tests;

@@ -3,7 +3,7 @@
 //! each of their targets, each played by its own node's `weights` channel over a window of keys.
 
 use super::accessor::{self, Data};
-use super::anim::{target_names, weight_keys};
+use super::anim::{channel_data, keys_of, target_names, weight_channels, weight_keys};
 use crate::io::IoError;
 use crate::mesh::Point;
 use std::path::Path;
@@ -55,6 +55,79 @@ pub(super) fn dequantize((t, s): ([f64; 3], f64), positions: &mut [Point]) {
     }
 }
 
+/// Weight keys: `(time in seconds, one weight per target)`.
+type Keys = Vec<(f64, Vec<f64>)>;
+
+/// The parts of a split rig (every mesh with `extras.morphkitTargets`, in document order, with
+/// those indices) and its target count; `None` when mesh 0 is not one of them.
+#[allow(clippy::type_complexity)]
+fn split_parts(doc: &::gltf::Document) -> Option<(Vec<(::gltf::Mesh<'_>, Vec<usize>)>, usize)> {
+    let parts: Vec<(::gltf::Mesh, Vec<usize>)> = doc
+        .meshes()
+        .filter_map(|m| rig_indices(m.extras()).map(|r| (m, r)))
+        .collect();
+    if parts.first().is_none_or(|(m, _)| m.index() != 0) {
+        return None;
+    }
+    let n = parts
+        .iter()
+        .flat_map(|(_, r)| r.iter().copied())
+        .max()
+        .map_or(0, |i| i.saturating_add(1));
+    Some((parts, n))
+}
+
+/// The weight keys of a split rig over all `n` of its targets: each part's keys
+/// (`part_keys(mesh index, its target count)`) in their rig's columns, zero elsewhere, the parts
+/// in order; a key at or before the last one taken is a window's shared boundary key, skipped.
+fn merge_keys(
+    parts: &[(::gltf::Mesh, Vec<usize>)],
+    n: usize,
+    mut part_keys: impl FnMut(usize, usize) -> Result<Keys, IoError>,
+) -> Result<Keys, IoError> {
+    let mut keys: Keys = Vec::new();
+    for (mesh, rig) in parts {
+        for (t, w) in part_keys(mesh.index(), rig.len())? {
+            if keys.last().is_some_and(|(last, _)| t <= *last) {
+                continue;
+            }
+            let mut row = vec![0.0; n];
+            for (j, x) in w.into_iter().enumerate() {
+                row[rig[j]] = x;
+            }
+            keys.push((t, row));
+        }
+    }
+    Ok(keys)
+}
+
+/// The keys of animation `anim` over the whole split rig that mesh `mesh` starts (see
+/// [`read_split`]), merged as [`read_split`] merges the first animation's: every target once,
+/// the windows' keys in time order. `None` when `mesh` does not start a split rig, so that an
+/// animation's keys have one column per target of [`read_split`]'s rig, not of the first window.
+pub(super) fn split_animation_keys(
+    path: &Path,
+    doc: &::gltf::Document,
+    data: &Data,
+    mesh: usize,
+    anim: usize,
+) -> Result<Option<Keys>, IoError> {
+    let Some((parts, n)) = split_parts(doc).filter(|_| mesh == 0) else {
+        return Ok(None);
+    };
+    let keys = merge_keys(&parts, n, |mi, count| {
+        let Some(ch) = weight_channels(doc, mi)
+            .into_iter()
+            .find(|c| c.anim == anim)
+        else {
+            return Ok(Vec::new());
+        };
+        let (times, values, cubic) = channel_data(path, doc, ch, count, data)?;
+        Ok(keys_of(&times, &values, cubic, count))
+    })?;
+    Ok(Some(keys))
+}
+
 /// The rig of a split file: names, absolute target positions and merged weight keys; `None`
 /// when mesh 0 is not part of a split rig. `base` are the base positions of mesh 0, which
 /// every part shares, already dequantized with `dequant` (whose scale the deltas need).
@@ -66,18 +139,9 @@ pub(super) fn read_split(
     base: &[Point],
     dequant: Option<([f64; 3], f64)>,
 ) -> Result<Option<(Vec<String>, Vec<Vec<Point>>, Vec<(f64, Vec<f64>)>)>, IoError> {
-    let parts: Vec<(::gltf::Mesh, Vec<usize>)> = doc
-        .meshes()
-        .filter_map(|m| rig_indices(m.extras()).map(|r| (m, r)))
-        .collect();
-    if parts.first().is_none_or(|(m, _)| m.index() != 0) {
+    let Some((parts, n)) = split_parts(doc) else {
         return Ok(None);
-    }
-    let n = parts
-        .iter()
-        .flat_map(|(_, r)| r.iter().copied())
-        .max()
-        .map_or(0, |i| i.saturating_add(1));
+    };
     // Every rig index must be held by some part, so there are at most as many as listed (this
     // also bounds the allocations below by the file's own size).
     let listed: usize = parts.iter().map(|(_, r)| r.len()).sum();
@@ -93,7 +157,6 @@ pub(super) fn read_split(
     let nv = base.len();
     let mut names = vec![String::new(); n];
     let mut targets: Vec<Option<Vec<Point>>> = vec![None; n];
-    let mut keys: Vec<(f64, Vec<f64>)> = Vec::new();
     for (mesh, rig) in &parts {
         let mi = mesh.index();
         let at =
@@ -137,17 +200,10 @@ pub(super) fn read_split(
                 names[g] = local_names[j].clone();
             }
         }
-        for (t, w) in weight_keys(path, doc, mi, rig.len(), data)? {
-            if keys.last().is_some_and(|(last, _)| t <= *last) {
-                continue;
-            }
-            let mut row = vec![0.0; n];
-            for (j, x) in w.into_iter().enumerate() {
-                row[rig[j]] = x;
-            }
-            keys.push((t, row));
-        }
     }
+    let keys = merge_keys(&parts, n, |mi, count| {
+        weight_keys(path, doc, mi, count, data)
+    })?;
     let targets = targets
         .into_iter()
         .enumerate()

@@ -132,3 +132,46 @@ fn a_file_that_is_not_a_cache_is_never_replaced() {
     assert!(std::fs::read(&old).unwrap().starts_with(b"MKINTER6"));
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// A preparation stopped by its caller's hook (Ctrl-C in Python) ends at the next snapshot
+/// solve, keeps nothing and writes no cache; a later preparation runs whole.
+#[test]
+fn a_stopped_preparation_ends_between_snapshots_and_writes_nothing() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let d = tmp("stopped");
+    let path = d.join("rig.mkinter");
+    for threads in [1, 2] {
+        let mut b = blend();
+        let asked = AtomicUsize::new(0);
+        // Stop at the third question: after two snapshot solves.
+        let stop = || asked.fetch_add(1, Ordering::Relaxed) + 1 >= 3;
+        let e = b
+            .prepare_interactive_cached_until(threads, &path, &stop)
+            .unwrap_err();
+        assert!(matches!(e, BlendError::Stopped { .. }), "{e}");
+        assert!(
+            e.to_string().contains("nothing of it was kept or written"),
+            "{e}"
+        );
+        assert!(b.interactive_space().is_none());
+        assert!(!path.exists(), "a stopped preparation wrote its cache");
+        // One thread asks once per solve and stops at once; the second thread asks once more
+        // at most before it sees the stop (of 7 snapshots and 8 checks in all).
+        let asked = asked.load(Ordering::Relaxed);
+        assert!(
+            asked <= 2 + threads,
+            "{threads} threads asked {asked} times"
+        );
+        let whole = b
+            .prepare_interactive_until(threads, &|| false)
+            .unwrap()
+            .len();
+        assert_eq!(whole, 7, "every eighth of the one target");
+    }
+    let mut b = blend();
+    let used = b
+        .prepare_interactive_cached_until(1, &path, &|| false)
+        .unwrap();
+    assert!(!used.loaded && path.exists());
+    let _ = std::fs::remove_dir_all(&d);
+}

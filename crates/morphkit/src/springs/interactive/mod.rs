@@ -28,9 +28,11 @@
 mod cache;
 #[cfg(test)]
 mod cache_tests;
+mod prepare;
 mod solve;
 
 pub(super) use cache::{decode, encode, is_cache_head};
+pub use prepare::InteractiveCacheUse;
 
 use super::reference::Factor;
 use super::rig::Rig;
