@@ -15,6 +15,7 @@ solves queue), and batches (``solve_many``, ``transfer_many``) honour Ctrl-C bet
 
 from ._errors import BlendError, FileError, MeshError, MorphkitError, TransferError
 from ._morphkit import (
+    BakedRig,
     Correspondence,
     Obstacle,
     Partitions,
@@ -42,6 +43,7 @@ from ._morphkit import (
 )
 
 __all__ = [
+    "BakedRig",
     "BlendError",
     "Correspondence",
     "FileError",

@@ -69,6 +69,26 @@ def continuity(
 ) -> Dict[str, Any]: ...
 
 
+class BakedRig:
+    """Physical correctives baked into in-between and combination shapes (PhysicalBlend.bake)."""
+
+    def evaluate(self, weights: Union[float, Sequence[float]]) -> Vertices: ...
+    def combination_weights(self, weights: Union[float, Sequence[float]]) -> List[float]: ...
+    def inbetween(self, target: int, k: int) -> Vertices: ...
+    def combination(self, k: int, level: int = 0) -> Vertices: ...
+    @property
+    def base(self) -> Vertices: ...
+    @property
+    def inbetween_weights(self) -> List[List[float]]: ...
+    @property
+    def combinations(self) -> List[Tuple[int, int]]: ...
+    @property
+    def combination_levels(self) -> List[List[float]]: ...
+    @property
+    def damping(self) -> float: ...
+    @property
+    def num_shapes(self) -> int: ...
+
 class PhysicalBlend:
     """Thread-safe: solves run one at a time (GIL released; concurrent calls queue), while
     ``num_targets``, ``summary``, ``last_stats``, ``predict`` and ``predictor`` answer at once."""
@@ -108,6 +128,16 @@ class PhysicalBlend:
         threads: int = 1,  # >= 1; the result does not depend on it
         cache: Optional[PathLike] = None,  # read when it holds this rig's preparation, else written
     ) -> Dict[str, Any]: ...
+    def bake(
+        self,
+        *,
+        inbetweens: int = 7,  # in-betweens per target at k / (inbetweens + 1)
+        pair_tolerance: float = 1e-4,  # fraction of the diagonal
+        max_pairs: int = 120,
+        damping: float = 2.0,
+        pair_samples: Optional[Sequence[float]] = None,  # default [0.5, 1.0]
+        threads: int = 1,
+    ) -> "BakedRig": ...
     def solve_many(
         self,
         weights: Sequence[Union[float, Sequence[float]]],

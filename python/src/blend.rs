@@ -382,6 +382,53 @@ impl PyPhysicalBlend {
         to_dict(py, &report)
     }
 
+    /// Bakes the physical blend into ordinary blendshapes (issue 56) and returns a
+    /// :class:`BakedRig`: per target, its equilibria alone at `k / (inbetweens + 1)` (default
+    /// 7: the eighths) as in-between shapes, and per pair of targets that interact (its
+    /// correction beyond the two in-betweens at (s, s) moves a vertex more than
+    /// `pair_tolerance` of the diagonal; at most `max_pairs`, largest first) a combination
+    /// shape with an in-between per pair sample `s` (`pair_samples`, default ½ and 1), driven
+    /// by `4 wi wj ((wi + wj) / sum w) ** damping` (default damping 2). Solves on up to
+    /// `threads` threads (the result does not depend on it); in the caller's (unwelded) layout.
+    #[pyo3(signature = (*, inbetweens=7, pair_tolerance=1e-4, max_pairs=120, damping=2.0,
+        pair_samples=None, threads=None))]
+    fn bake(
+        &self,
+        py: Python<'_>,
+        inbetweens: usize,
+        pair_tolerance: f64,
+        max_pairs: usize,
+        damping: f64,
+        pair_samples: Option<Vec<f64>>,
+        threads: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<crate::bake::PyBakedRig> {
+        let threads = args::opt_count("threads", threads, Kind::Blend, 1)?.unwrap_or(1);
+        let defaults = morphkit::bake::BakeOptions::default();
+        let options = morphkit::bake::BakeOptions {
+            inbetweens,
+            pair_tolerance,
+            max_pairs,
+            damping,
+            pair_samples: pair_samples.unwrap_or(defaults.pair_samples),
+        };
+        let weld = self.weld.clone();
+        let baked = py.detach(|| {
+            let mut solver = lock(&self.inner);
+            let Solver::Surface(b) = &mut *solver else {
+                return Err(
+                    "a bake is for surface blends (not with interior or anchor)".to_string()
+                );
+            };
+            let rig = morphkit::bake::bake(b, &options, threads).map_err(|e| e.to_string())?;
+            Ok(match weld {
+                Some(w) => rig.unweld(&w, b.shapes()),
+                None => rig,
+            })
+        });
+        let inner = baked.map_err(|e| new_err(Kind::Blend, e))?;
+        Ok(crate::bake::PyBakedRig { inner })
+    }
+
     /// Solves every weight vector of `weights` (a sequence, each as in :meth:`solve`) on up to
     /// `threads` threads (an integer ≥ 1) and returns a `(len(weights), n, 3)` array, in input
     /// order, equal to solving them one by one. :attr:`last_stats` is the last frame's. The

@@ -5,6 +5,7 @@
 
 mod args;
 mod arrays;
+mod bake;
 mod blend;
 mod blend_args;
 mod dict;
@@ -43,6 +44,7 @@ fn _morphkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(transfer_options::rig_defaults, m)?)?;
     m.add_class::<synth::PyPartitions>()?;
     m.add_class::<blend::PyPhysicalBlend>()?;
+    m.add_class::<bake::PyBakedRig>()?;
     m.add_class::<blend::PyPredictor>()?;
     m.add_class::<scene::PyObstacle>()?;
     m.add_class::<scene::PySceneBlend>()?;

@@ -8,22 +8,27 @@
 //!   DCCs interpolate in-betweens), from 0 at `w = 0`; beyond `[0, 1]` the first and last
 //!   segments extend linearly.
 //! - **Combination shapes** per pair of targets that interact: the part of the pair's
-//!   equilibrium at `(½, ½)` that the two targets' in-betweens at ½ do not make,
-//!   `C_ij = P(½eᵢ + ½eⱼ) − base − Dᵢ(½) − Dⱼ(½)`, driven by a weight
-//!   [`BakedRig::combination_weight`] that is `4 wᵢ wⱼ` (1 at the sample) scaled down where other
-//!   targets are on: `4 wᵢ wⱼ · ((wᵢ + wⱼ) / Σₖ wₖ)^p` over the positive weights (`p` =
-//!   [`BakeOptions::damping`]). With two targets on, the plain product; with three equal ones,
-//!   each pair at `(2/3)^p` of it. Pair correctives fitted on pairs overshoot where three
-//!   targets meet (they correct the same shrinkage two or three times); the damping is the
-//!   simplest rule a driver can compute that makes the sum of the pair corrections behave like
-//!   one correction per region, and it changes nothing on pairs and singles.
+//!   equilibrium at `(s, s)` that the two targets' in-betweens at `s` do not make,
+//!   `C_ij(s) = P(s eᵢ + s eⱼ) − base − Dᵢ(s) − Dⱼ(s)`, for `s` = ½ and 1
+//!   ([`BakeOptions::pair_samples`]), as in-betweens of one combination shape at combination
+//!   weights `4 s²` (1 and 4), piecewise linear in a weight [`BakedRig::combination_weight`]
+//!   that is `4 wᵢ wⱼ` with two targets on and is scaled down where other targets are on:
+//!   `4 wᵢ wⱼ · ((wᵢ + wⱼ) / Σₖ wₖ)^p` over the positive weights (`p` =
+//!   [`BakeOptions::damping`], default 2: with three equal weights each pair at 4/9). Pair
+//!   correctives fitted at `(½, ½)` alone, extrapolated bilinearly, overshoot where the pair's
+//!   weights are both high, and corrections of pairs add up where three targets meet (they
+//!   correct the same region two or three times): the second sample and the damping are the
+//!   simplest rules a driver computes that keep every measured state closer to the solve than
+//!   the linear blend (`examples/bake_accuracy.rs`); they change nothing on singles, nor on a
+//!   pair at its samples.
 //!
 //! `evaluate(w) = base + Σᵢ Dᵢ(wᵢ) + Σ_{pairs} φᵢⱼ(w) Cᵢⱼ`, `#V` positions: a linear blend of
 //! stored shapes with weights computed from the sliders, which a glTF viewer (the mapping in
 //! `extras`), USD (`UsdSkelInbetweenShape`s) or Blender (drivers) can play.
 
-use crate::mesh::Point;
+use crate::mesh::{Point, Weld};
 use crate::springs::{BlendError, PhysicalBlend, Weights};
+use crate::ShapeSet;
 
 #[cfg(test)]
 mod tests;
@@ -40,8 +45,11 @@ pub struct BakeOptions {
     /// Most combination shapes kept (those that move a vertex farthest first; default 120, so
     /// that with 10 targets × 8 shapes a rig stays within the 200 targets WebGL2 plays).
     pub max_pairs: usize,
-    /// The exponent `p` of the combination weights' damping (default 1; 0: the plain product).
+    /// The exponent `p` of the combination weights' damping (default 2; 0: the plain product).
     pub damping: f64,
+    /// The pair samples `s`: each pair is solved at `(s, s)` (default ½ and 1), which gives
+    /// its combination shape an in-between at combination weight `4 s²`.
+    pub pair_samples: Vec<f64>,
 }
 
 impl Default for BakeOptions {
@@ -50,7 +58,8 @@ impl Default for BakeOptions {
             inbetweens: 7,
             pair_tolerance: 1e-4,
             max_pairs: 120,
-            damping: 1.0,
+            damping: 2.0,
+            pair_samples: vec![0.5, 1.0],
         }
     }
 }
@@ -64,13 +73,15 @@ pub struct BakedTarget {
     pub deltas: Vec<Vec<Point>>,
 }
 
-/// A combination shape.
+/// A combination shape, with in-betweens of its own.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Combination {
     /// The two targets (`i < j`, 0-based target indices).
     pub targets: (usize, usize),
-    /// `#V` displacements at combination weight 1.
-    pub delta: Vec<Point>,
+    /// Its shapes: `weights` are combination weights (`4 s²` for the pair sample at
+    /// `(s, s)`: 1 at `(½, ½)`, 4 at `(1, 1)`), `deltas` the `#V` corrections there; piecewise
+    /// linear in [`BakedRig::combination_weight`] between them, from 0 at 0.
+    pub shape: BakedTarget,
 }
 
 /// Baked physical correctives (see the [module documentation](self)).
@@ -150,21 +161,79 @@ impl BakedRig {
             piecewise(t, x, &mut out);
         }
         for c in &self.combinations {
-            let f = self.combination_weight(c, w);
-            if f != 0.0 {
-                for (o, d) in out.iter_mut().zip(&c.delta) {
-                    for k in 0..3 {
-                        o[k] += f * d[k];
-                    }
-                }
-            }
+            piecewise(&c.shape, self.combination_weight(c, w), &mut out);
         }
         out
     }
 
+    /// The bake of a welded rig in its input's layout (`#V_in` vertices): every delta
+    /// scattered to the copies of its welded vertex, and the base and each target at weight 1
+    /// the input's own numbers (copies keep their own positions at the shapes themselves, as
+    /// [`Weld::scatter_frame`] gives them). `welded` is the rig the bake was made on (the
+    /// solver's shapes, `weld.shapes(input)`).
+    pub fn unweld(&self, weld: &Weld, welded: &ShapeSet) -> BakedRig {
+        if weld.is_identity() {
+            return self.clone();
+        }
+        let n = welded.len();
+        let own = |s: usize| {
+            let mut c = vec![0.0; n];
+            c[s] = 1.0;
+            weld.scatter_frame(welded.positions(s), &c)
+        };
+        let base = own(0);
+        let targets = self
+            .targets
+            .iter()
+            .enumerate()
+            .map(|(t, bt)| {
+                let last = bt.deltas.len() - 1;
+                let deltas = bt
+                    .deltas
+                    .iter()
+                    .enumerate()
+                    .map(|(k, d)| {
+                        if k == last && bt.weights[k] == 1.0 {
+                            sub(&own(t + 1), &base)
+                        } else {
+                            weld.scatter(d)
+                        }
+                    })
+                    .collect();
+                BakedTarget {
+                    weights: bt.weights.clone(),
+                    deltas,
+                }
+            })
+            .collect();
+        let combinations = self
+            .combinations
+            .iter()
+            .map(|c| Combination {
+                targets: c.targets,
+                shape: BakedTarget {
+                    weights: c.shape.weights.clone(),
+                    deltas: c.shape.deltas.iter().map(|d| weld.scatter(d)).collect(),
+                },
+            })
+            .collect();
+        BakedRig {
+            base,
+            targets,
+            combinations,
+            damping: self.damping,
+        }
+    }
+
     /// Shapes a client holds: in-betweens (the targets' own included) plus combinations.
     pub fn num_shapes(&self) -> usize {
-        self.targets.iter().map(|t| t.weights.len()).sum::<usize>() + self.combinations.len()
+        let shapes = |t: &BakedTarget| t.weights.len();
+        self.targets.iter().map(shapes).sum::<usize>()
+            + self
+                .combinations
+                .iter()
+                .map(|c| shapes(&c.shape))
+                .sum::<usize>()
     }
 }
 
@@ -186,13 +255,20 @@ pub fn bake(
     options: &BakeOptions,
     threads: usize,
 ) -> Result<BakedRig, BakeError> {
+    let increasing = options.pair_samples.windows(2).all(|p| p[0] < p[1]);
     if options.inbetweens == 0
+        || options.pair_samples.is_empty()
+        || !increasing
+        || options
+            .pair_samples
+            .iter()
+            .any(|&s| !(s > 0.0 && s.is_finite()))
         || !(options.pair_tolerance >= 0.0)
         || !(options.damping >= 0.0 && options.damping.is_finite())
     {
         return Err(BakeError::Options(format!(
-            "in-betweens must be at least 1, the pair tolerance and the damping finite and not \
-             negative: {options:?}"
+            "in-betweens must be at least 1, the pair samples positive and increasing, the pair \
+             tolerance and the damping finite and not negative: {options:?}"
         )));
     }
     let shapes = solver.shapes();
@@ -212,11 +288,14 @@ pub fn bake(
     let pairs: Vec<(usize, usize)> = (0..n)
         .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
         .collect();
+    let samples = &options.pair_samples;
     for &(i, j) in &pairs {
-        let mut w = vec![0.0; n];
-        w[i] = 0.5;
-        w[j] = 0.5;
-        weights.push(w);
+        for &s in samples {
+            let mut w = vec![0.0; n];
+            w[i] = s;
+            w[j] = s;
+            weights.push(w);
+        }
     }
     let as_weights: Vec<Weights> = weights.iter().map(|w| Weights::Delta(w.clone())).collect();
     let mut solved = Vec::with_capacity(weights.len());
@@ -250,21 +329,27 @@ pub fn bake(
     };
     let mut combos: Vec<(f64, Combination)> = Vec::new();
     for (k, &(i, j)) in pairs.iter().enumerate() {
-        let mut w = vec![0.0; n];
-        w[i] = 0.5;
-        w[j] = 0.5;
-        // What the in-betweens alone make at (½, ½), without combinations.
-        let mut singles = rig.base.clone();
-        piecewise(&rig.targets[i], 0.5, &mut singles);
-        piecewise(&rig.targets[j], 0.5, &mut singles);
-        let delta = sub(&solved[n * m + k], &singles);
-        let size = crate::geom::max_distance(&delta, &vec![[0.0; 3]; delta.len()]);
+        let mut deltas = Vec::with_capacity(samples.len());
+        let mut size: f64 = 0.0;
+        for (q, &s) in samples.iter().enumerate() {
+            // What the in-betweens alone make at (s, s), without combinations.
+            let mut singles = rig.base.clone();
+            piecewise(&rig.targets[i], s, &mut singles);
+            piecewise(&rig.targets[j], s, &mut singles);
+            let delta = sub(&solved[n * m + k * samples.len() + q], &singles);
+            size = size.max(crate::geom::max_distance(
+                &delta,
+                &vec![[0.0; 3]; delta.len()],
+            ));
+            deltas.push(delta);
+        }
         if size > options.pair_tolerance * diagonal {
+            let weights = samples.iter().map(|s| 4.0 * s * s).collect();
             combos.push((
                 size,
                 Combination {
                     targets: (i, j),
-                    delta,
+                    shape: BakedTarget { weights, deltas },
                 },
             ));
         }

@@ -68,15 +68,18 @@ fn a_bake_is_the_solve_at_its_samples_and_the_targets_at_one() {
             assert!(e <= 1e-12 * diag, "target {t} at {a}: {e}");
         }
     }
-    // Every pair interacts here, and at (½, ½) the bake is the pair's equilibrium.
+    // Every pair interacts here, and at (½, ½) and (1, 1) the bake is the pair's equilibrium.
     assert_eq!(b.combinations.len(), 3);
     for c in &b.combinations {
-        let mut w = vec![0.0; 3];
-        w[c.targets.0] = 0.5;
-        w[c.targets.1] = 0.5;
-        assert_eq!(b.combination_weight(c, &w), 1.0);
-        let e = max_distance(&b.evaluate(&w), &solve(&mut s, &w));
-        assert!(e <= 1e-12 * diag, "{:?}: {e}", c.targets);
+        assert_eq!(c.shape.weights, [1.0, 4.0]);
+        for (x, level) in [(0.5, 1.0), (1.0, 4.0)] {
+            let mut w = vec![0.0; 3];
+            w[c.targets.0] = x;
+            w[c.targets.1] = x;
+            assert_eq!(b.combination_weight(c, &w), level);
+            let e = max_distance(&b.evaluate(&w), &solve(&mut s, &w));
+            assert!(e <= 1e-12 * diag, "{:?} at {x}: {e}", c.targets);
+        }
     }
     // The same bake whatever the thread count.
     let mut s1 = PhysicalBlend::new(&shapes, &BlendOptions::default()).unwrap();
@@ -87,7 +90,10 @@ fn a_bake_is_the_solve_at_its_samples_and_the_targets_at_one() {
 fn combination_weights_are_the_product_for_two_and_damped_for_more() {
     let c = Combination {
         targets: (0, 1),
-        delta: Vec::new(),
+        shape: BakedTarget {
+            weights: vec![1.0],
+            deltas: Vec::new(),
+        },
     };
     let mut b = BakedRig {
         base: Vec::new(),
@@ -142,6 +148,10 @@ fn bad_options_are_refused() {
         },
         BakeOptions {
             damping: f64::NAN,
+            ..BakeOptions::default()
+        },
+        BakeOptions {
+            pair_samples: vec![1.0, 0.5],
             ..BakeOptions::default()
         },
     ] {
