@@ -134,7 +134,7 @@ class PhysicalBlend:
         inbetweens: int = 7,  # in-betweens per target at k / (inbetweens + 1)
         pair_tolerance: float = 1e-4,  # fraction of the diagonal
         max_pairs: int = 120,
-        damping: float = 2.0,
+        damping: float = 0.0,
         pair_samples: Optional[Sequence[float]] = None,  # default [0.5, 1.0]
         threads: int = 1,
     ) -> "BakedRig": ...

@@ -388,9 +388,9 @@ impl PyPhysicalBlend {
     /// correction beyond the two in-betweens at (s, s) moves a vertex more than
     /// `pair_tolerance` of the diagonal; at most `max_pairs`, largest first) a combination
     /// shape with an in-between per pair sample `s` (`pair_samples`, default ½ and 1), driven
-    /// by `4 wi wj ((wi + wj) / sum w) ** damping` (default damping 2). Solves on up to
+    /// by `4 wi wj ((wi + wj) / sum w) ** damping` (default damping 0: the plain product). Solves on up to
     /// `threads` threads (the result does not depend on it); in the caller's (unwelded) layout.
-    #[pyo3(signature = (*, inbetweens=7, pair_tolerance=1e-4, max_pairs=120, damping=2.0,
+    #[pyo3(signature = (*, inbetweens=7, pair_tolerance=1e-4, max_pairs=120, damping=0.0,
         pair_samples=None, threads=None))]
     fn bake(
         &self,

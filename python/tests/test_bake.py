@@ -42,7 +42,7 @@ def test_a_bake_plays_the_solve_at_its_samples_and_the_shapes_exactly():
     assert rig.combinations == [(0, 1), (0, 2), (1, 2)]
     assert rig.num_shapes == 12 + 3 * 2
     assert rig.combination_levels == [[1.0, 4.0]] * 3
-    assert rig.damping == 2.0
+    assert rig.damping == 0.0
     d = diag(V)
     np.testing.assert_array_equal(rig.base, V)
     # One-hot weights: every input vertex (seam copies included) is its own target: the stored
@@ -62,9 +62,11 @@ def test_a_bake_plays_the_solve_at_its_samples_and_the_shapes_exactly():
             w[i] = w[j] = s
             assert rig.combination_weights(w)[k] == level
             assert np.abs(rig.evaluate(w) - blend.solve(w)).max() <= 1e-12 * d
-    # Three on: damped by the square of the pair's share of the total weight.
-    cw = rig.combination_weights([0.5, 0.5, 0.5])
-    np.testing.assert_allclose(cw, [4.0 / 9.0] * 3, rtol=1e-15)
+    # Three on: the plain product by default; damped by the square of the pair's share of
+    # the total weight when asked.
+    np.testing.assert_allclose(rig.combination_weights([0.5, 0.5, 0.5]), [1.0] * 3, rtol=1e-15)
+    damped = blend.bake(inbetweens=3, damping=2.0)
+    np.testing.assert_allclose(damped.combination_weights([0.5, 0.5, 0.5]), [4.0 / 9.0] * 3, rtol=1e-15)
     with pytest.raises(IndexError):
         rig.inbetween(3, 0)
     with pytest.raises(morphkit.MorphkitError):

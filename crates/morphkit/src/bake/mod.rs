@@ -11,16 +11,20 @@
 //!   equilibrium at `(s, s)` that the two targets' in-betweens at `s` do not make,
 //!   `C_ij(s) = P(s eᵢ + s eⱼ) − base − Dᵢ(s) − Dⱼ(s)`, for `s` = ½ and 1
 //!   ([`BakeOptions::pair_samples`]), as in-betweens of one combination shape at combination
-//!   weights `4 s²` (1 and 4), piecewise linear in a weight [`BakedRig::combination_weight`]
-//!   that is `4 wᵢ wⱼ` with two targets on and is scaled down where other targets are on:
+//!   weights `4 s²` (1 and 4), piecewise linear in the weight [`BakedRig::combination_weight`]
+//!   `4 wᵢ wⱼ`, optionally damped where other targets are on:
 //!   `4 wᵢ wⱼ · ((wᵢ + wⱼ) / Σₖ wₖ)^p` over the positive weights (`p` =
-//!   [`BakeOptions::damping`], default 2: with three equal weights each pair at 4/9). Pair
-//!   correctives fitted at `(½, ½)` alone, extrapolated bilinearly, overshoot where the pair's
-//!   weights are both high, and corrections of pairs add up where three targets meet (they
-//!   correct the same region two or three times): the second sample and the damping are the
-//!   simplest rules a driver computes that keep every measured state closer to the solve than
-//!   the linear blend (`examples/bake_accuracy.rs`); they change nothing on singles, nor on a
-//!   pair at its samples.
+//!   [`BakeOptions::damping`], default 0).
+//!
+//! Why two pair samples and no damping (measured on the ICT head with ten expressions,
+//! `examples/bake_accuracy.rs`, twelve random triples at 0.3–1): with one sample at `(½, ½)`
+//! extrapolated bilinearly, the corrective of a pair whose weights are both high overshoots
+//! (mouthSmile_L + jawOpen + jawLeft: 6.2e-2 of the diagonal from the solve, the linear blend
+//! 1.8e-2); damping by the pair's share of the weights (`p` = 1, 2) only brought it to 3.5e-2
+//! and 1.8e-2. The second sample at `(1, 1)` fixes the cause: the same triple is 2.7e-3 off,
+//! the worst triple 2.7e-3 and the median 6.2e-4 (damping then makes it worse: 8.3e-3 and
+//! 1.2e-2 at `p` = 1, 2), every state closer than the linear blend; single targets at any
+//! weight within 8.1e-5 (the eighths' piecewise-linear error).
 //!
 //! `evaluate(w) = base + Σᵢ Dᵢ(wᵢ) + Σ_{pairs} φᵢⱼ(w) Cᵢⱼ`, `#V` positions: a linear blend of
 //! stored shapes with weights computed from the sliders, which a glTF viewer (the mapping in
@@ -45,7 +49,8 @@ pub struct BakeOptions {
     /// Most combination shapes kept (those that move a vertex farthest first; default 120, so
     /// that with 10 targets × 8 shapes a rig stays within the 200 targets WebGL2 plays).
     pub max_pairs: usize,
-    /// The exponent `p` of the combination weights' damping (default 2; 0: the plain product).
+    /// The exponent `p` of the combination weights' damping (default 0: the plain product,
+    /// which measured best with two pair samples; see the [module documentation](self)).
     pub damping: f64,
     /// The pair samples `s`: each pair is solved at `(s, s)` (default ½ and 1), which gives
     /// its combination shape an in-between at combination weight `4 s²`.
@@ -58,7 +63,7 @@ impl Default for BakeOptions {
             inbetweens: 7,
             pair_tolerance: 1e-4,
             max_pairs: 120,
-            damping: 2.0,
+            damping: 0.0,
             pair_samples: vec![0.5, 1.0],
         }
     }
