@@ -40,6 +40,14 @@ impl PyBakedRig {
         Ok(to_array(py, &self.inner.evaluate(&w)))
     }
 
+    /// The weight of every stored shape at `weights` (each target's in-betweens in order,
+    /// then each combination's): the mapping from slider weights to shape weights a client
+    /// computes; `evaluate(w)` is `base` plus these weights times the shapes.
+    fn shape_weights(&self, weights: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+        let w = self.delta_weights(weights)?;
+        Ok(self.inner.shape_weights(&w))
+    }
+
     /// The weight of every combination shape at `weights` (in :attr:`combinations`' order):
     /// `4 wi wj ((wi + wj) / sum of the positive weights) ** damping`, 0 unless both are
     /// positive.

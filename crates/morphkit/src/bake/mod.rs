@@ -118,28 +118,31 @@ pub enum BakeError {
     Options(String),
 }
 
-/// `x` piecewise linear through `(0, 0)` and `(weights[k], deltas[k])`, extended linearly.
-fn piecewise(t: &BakedTarget, w: f64, out: &mut [Point]) {
-    if w == 0.0 || t.weights.is_empty() {
-        return;
+/// The shapes of a piecewise-linear in-between curve through `(0, 0)` and
+/// `(weights[k], shape k)` at `w`, extended linearly beyond its ends: up to two
+/// `(shape, factor)` pairs (the segment's ends; the first segment starts at no shape).
+fn hat(weights: &[f64], w: f64) -> [(usize, f64); 2] {
+    if w == 0.0 || weights.is_empty() {
+        return [(0, 0.0); 2];
     }
     // The segment [a, b] holding w (the first or last one outside [0, 1]).
-    let k = t
-        .weights
+    let k = weights
         .iter()
         .position(|&x| w <= x)
-        .unwrap_or(t.weights.len() - 1);
-    let (a, da) = if k == 0 {
-        (0.0, None)
-    } else {
-        (t.weights[k - 1], Some(&t.deltas[k - 1]))
-    };
-    let (b, db) = (t.weights[k], &t.deltas[k]);
-    let s = (w - a) / (b - a);
-    for (v, o) in out.iter_mut().enumerate() {
-        for c in 0..3 {
-            let lo = da.map_or(0.0, |d| d[v][c]);
-            o[c] += lo + s * (db[v][c] - lo);
+        .unwrap_or(weights.len() - 1);
+    let a = if k == 0 { 0.0 } else { weights[k - 1] };
+    let s = (w - a) / (weights[k] - a);
+    let below = if k == 0 { (0, 0.0) } else { (k - 1, 1.0 - s) };
+    [below, (k, s)]
+}
+
+/// Adds `f · d` to `out`.
+fn add_scaled(out: &mut [Point], f: f64, d: &[Point]) {
+    if f != 0.0 {
+        for (o, p) in out.iter_mut().zip(d) {
+            for c in 0..3 {
+                o[c] += f * p[c];
+            }
         }
     }
 }
@@ -158,15 +161,46 @@ impl BakedRig {
         4.0 * a * b * share.powf(self.damping)
     }
 
-    /// The baked shape at delta weights `w` (one per target): `#V` positions, as a DCC
-    /// evaluates the in-betweens and combination shapes.
-    pub fn evaluate(&self, w: &[f64]) -> Vec<Point> {
-        let mut out = self.base.clone();
+    /// The weight of every stored shape at delta weights `w` (one per target): each target's
+    /// in-betweens in order, then each combination's, in [`BakedRig::shapes`]' order. A
+    /// target's weight `x` falls in one segment of its in-between weights (the first from 0,
+    /// the last extended beyond 1): the segment's upper shape weighs `s = (x − a) / (b − a)`,
+    /// its lower one `1 − s`; a combination does the same with its combination weight. This
+    /// is the whole mapping a client computes (docs/bake.md has it in JavaScript).
+    pub fn shape_weights(&self, w: &[f64]) -> Vec<f64> {
+        let mut out = Vec::with_capacity(self.num_shapes());
+        let mut put = |weights: &[f64], x: f64| {
+            let start = out.len();
+            out.resize(start + weights.len(), 0.0);
+            for (k, f) in hat(weights, x) {
+                if f != 0.0 {
+                    out[start + k] += f;
+                }
+            }
+        };
         for (t, &x) in self.targets.iter().zip(w) {
-            piecewise(t, x, &mut out);
+            put(&t.weights, x);
         }
         for c in &self.combinations {
-            piecewise(&c.shape, self.combination_weight(c, w), &mut out);
+            put(&c.shape.weights, self.combination_weight(c, w));
+        }
+        out
+    }
+
+    /// Every stored shape's `#V` displacement, in [`BakedRig::shape_weights`]' order.
+    pub fn shapes(&self) -> impl Iterator<Item = &Vec<Point>> {
+        self.targets
+            .iter()
+            .flat_map(|t| &t.deltas)
+            .chain(self.combinations.iter().flat_map(|c| &c.shape.deltas))
+    }
+
+    /// The baked shape at delta weights `w` (one per target): `#V` positions, base + Σ
+    /// [`BakedRig::shape_weights`] × [`BakedRig::shapes`], as a client evaluates it.
+    pub fn evaluate(&self, w: &[f64]) -> Vec<Point> {
+        let mut out = self.base.clone();
+        for (f, d) in self.shape_weights(w).into_iter().zip(self.shapes()) {
+            add_scaled(&mut out, f, d);
         }
         out
     }
@@ -339,8 +373,11 @@ pub fn bake(
         for (q, &s) in samples.iter().enumerate() {
             // What the in-betweens alone make at (s, s), without combinations.
             let mut singles = rig.base.clone();
-            piecewise(&rig.targets[i], s, &mut singles);
-            piecewise(&rig.targets[j], s, &mut singles);
+            for t in [&rig.targets[i], &rig.targets[j]] {
+                for (k, f) in hat(&t.weights, s) {
+                    add_scaled(&mut singles, f, &t.deltas[k]);
+                }
+            }
             let delta = sub(&solved[n * m + k * samples.len() + q], &singles);
             size = size.max(crate::geom::max_distance(
                 &delta,

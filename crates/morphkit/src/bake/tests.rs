@@ -158,3 +158,46 @@ fn bad_options_are_refused() {
         assert!(matches!(bake(&mut s, &o, 1), Err(BakeError::Options(_))));
     }
 }
+
+#[test]
+fn shape_weights_interpolate_between_in_betweens_and_extend_the_end_segments() {
+    let t = |weights: Vec<f64>| BakedTarget {
+        deltas: vec![vec![[0.0; 3]]; weights.len()],
+        weights,
+    };
+    let b = BakedRig {
+        base: vec![[0.0; 3]],
+        targets: vec![t(vec![0.25, 0.5, 1.0]), t(vec![1.0])],
+        combinations: vec![Combination {
+            targets: (0, 1),
+            shape: t(vec![1.0, 4.0]),
+        }],
+        damping: 0.0,
+    };
+    let close = |a: Vec<f64>, b: &[f64]| {
+        assert_eq!(a.len(), b.len());
+        for (x, y) in a.iter().zip(b) {
+            assert!((x - y).abs() < 1e-14, "{a:?} vs {b:?}");
+        }
+    };
+    // Target 0 at 0.375: halfway between its in-betweens at ¼ and ½; target 1 off.
+    close(
+        b.shape_weights(&[0.375, 0.0]),
+        &[0.5, 0.5, 0.0, 0.0, 0.0, 0.0],
+    );
+    // Below the first in-between: a share of it; beyond 1: the last segment extended.
+    close(
+        b.shape_weights(&[0.1, 1.2]),
+        &[0.4, 0.0, 0.0, 1.2, 0.0, 0.0],
+    );
+    close(
+        b.shape_weights(&[1.25, 0.0]),
+        &[0.0, -0.5, 1.5, 0.0, 0.0, 0.0],
+    );
+    // Both on: the combination at 4 · 0.5 · 0.75 = 1.5, between its levels 1 and 4.
+    close(
+        b.shape_weights(&[0.5, 0.75]),
+        &[0.0, 1.0, 0.0, 0.75, 5.0 / 6.0, 1.0 / 6.0],
+    );
+    assert_eq!(b.shapes().count(), b.num_shapes());
+}
