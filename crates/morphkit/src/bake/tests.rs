@@ -185,10 +185,11 @@ fn shape_weights_interpolate_between_in_betweens_and_extend_the_end_segments() {
         b.shape_weights(&[0.375, 0.0]),
         &[0.5, 0.5, 0.0, 0.0, 0.0, 0.0],
     );
-    // Below the first in-between: a share of it; beyond 1: the last segment extended.
+    // Below the first in-between: a share of it; beyond 1: the last segment extended (the
+    // combination at 4 · 0.1 · 1.2 = 0.48 of its first level).
     close(
         b.shape_weights(&[0.1, 1.2]),
-        &[0.4, 0.0, 0.0, 1.2, 0.0, 0.0],
+        &[0.4, 0.0, 0.0, 1.2, 0.48, 0.0],
     );
     close(
         b.shape_weights(&[1.25, 0.0]),
