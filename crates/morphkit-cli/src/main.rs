@@ -33,6 +33,8 @@ enum Command {
     Transfer(cmd::transfer::TransferArgs),
     /// Move a blendshape rig (neutral + named expressions) onto another character as a GLB.
     Rig(cmd::rig::RigArgs),
+    /// Bake a glTF rig's physical blend into in-between and combination shapes (any client).
+    Bake(cmd::bake::BakeArgs),
     /// Show how flexible each triangle of an animation is (where markers are needed).
     Flex(cmd::flex::FlexArgs),
     /// Assemble a new animation from parts of several animations, by a TOML recipe.
@@ -97,6 +99,7 @@ fn main() {
         Command::Correspond(_) => "correspond",
         Command::Transfer(_) => "transfer",
         Command::Rig(_) => "rig",
+        Command::Bake(_) => "bake",
         Command::Flex(_) => "flex",
         Command::Synth(_) => "synth",
         Command::Bench(_) => "bench",
@@ -110,6 +113,7 @@ fn main() {
         Command::Correspond(a) => cmd::correspond::run(a),
         Command::Transfer(a) => cmd::transfer::run(a),
         Command::Rig(a) => cmd::rig::run(a),
+        Command::Bake(a) => cmd::bake::run(a),
         Command::Flex(a) => cmd::flex::run(a),
         Command::Synth(a) => cmd::synth::run(a),
         Command::Bench(a) => cmd::bench::run(a),

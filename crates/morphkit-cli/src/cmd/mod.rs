@@ -1,5 +1,6 @@
 //! One module per subcommand: its clap arguments and its `run`.
 
+pub mod bake;
 pub mod bench;
 pub mod bench_continuity;
 pub mod bench_machine;

@@ -343,6 +343,29 @@ impl GltfAsset {
         Ok(at)
     }
 
+    /// Sets `key` in the chosen mesh's `extras` (created when absent) to `value`: where a
+    /// command records what a client needs to play what it added (e.g. `morphkitBake`, the
+    /// mapping from sliders to baked shapes). Errors: `extras` that is not an object.
+    pub fn set_mesh_extra(&mut self, key: &str, value: Value) -> Result<(), IoError> {
+        let mesh = &mut self.doc["meshes"][self.mesh];
+        if mesh["extras"].is_null() {
+            mesh["extras"] = json!({});
+        }
+        match mesh["extras"].as_object_mut() {
+            Some(e) => {
+                e.insert(key.into(), value);
+                Ok(())
+            }
+            None => Err(IoError::content(
+                &self.path,
+                format!(
+                    "mesh {}: extras is not an object, so '{key}' cannot be added",
+                    self.mesh
+                ),
+            )),
+        }
+    }
+
     /// Writes the target names into `mesh.extras.targetNames` (when `extras` is an object or
     /// absent).
     fn store_names(&mut self) {

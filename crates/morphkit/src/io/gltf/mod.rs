@@ -82,6 +82,7 @@ mod accessor;
 mod anim;
 mod asset;
 mod asset_anim;
+mod asset_bake;
 mod asset_edit;
 mod asset_write;
 mod budget;

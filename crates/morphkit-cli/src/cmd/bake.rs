@@ -1,0 +1,147 @@
+//! `morphkit bake`: a glTF rig's physical blend baked into ordinary blendshapes (issue 56), so
+//! that a DCC or an engine plays the physical look live at the cost of a linear blend. The
+//! asset comes back whole with the in-between and combination shapes added as morph targets
+//! and the mapping from its sliders to them in `mesh.extras.morphkitBake`
+//! ([`morphkit::io::GltfAsset::add_bake`]; the client's evaluation is in docs/bake.md). The
+//! shapes are [`morphkit::bake::bake`]'s, on the welded rig, written in the asset's layout.
+
+use crate::outputs::{Kind, Plan};
+use anyhow::{bail, Context};
+use morphkit::bake::{bake, BakeOptions};
+use morphkit::io::{Format, GltfAsset, GltfReadOptions};
+use morphkit::mesh::{ShapeSet, Weld, WELD_TOLERANCE};
+use morphkit::springs::{BlendOptions, PhysicalBlend};
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+const EXAMPLES: &str = "\
+Examples:
+  morphkit bake --rig face.glb --out face-baked.glb
+  morphkit bake --rig face.glb --mesh Head --inbetweens 3 --report bake.json --out baked.glb
+
+The output plays in any glTF viewer as the linear blend of the sliders' targets; the physical
+look needs the sliders mapped to the baked targets' weights (mesh.extras.morphkitBake; about
+twenty lines of JavaScript for three.js in docs/bake.md).";
+
+/// Arguments of `morphkit bake`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = EXAMPLES)]
+pub struct BakeArgs {
+    /// The rig: a .glb/.gltf whose mesh has named morph targets (the sliders).
+    #[arg(long)]
+    pub rig: PathBuf,
+    /// The mesh, by name or index, when several have morph targets.
+    #[arg(long)]
+    pub mesh: Option<String>,
+    /// The baked asset (.glb or .gltf).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// In-between shapes per target, at k / (N + 1) (default 7: the eighths).
+    #[arg(long)]
+    pub inbetweens: Option<usize>,
+    /// Most combination shapes' pairs, those that move a vertex farthest first (default 120).
+    #[arg(long)]
+    pub max_pairs: Option<usize>,
+    /// A JSON report: counts, sizes and timings.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Threads for the solves (default: the machine's cores); the result does not depend on it.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Overwrite outputs that exist.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Runs `morphkit bake`.
+pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
+    let start = Instant::now();
+    if !matches!(Format::from_path(&a.out), Some(Format::Glb | Format::Gltf)) {
+        bail!(
+            "{}: the baked rig is written as .glb or .gltf",
+            a.out.display()
+        );
+    }
+    let defaults = BakeOptions::default();
+    let options = BakeOptions {
+        inbetweens: a.inbetweens.unwrap_or(defaults.inbetweens),
+        max_pairs: a.max_pairs.unwrap_or(defaults.max_pairs),
+        ..defaults
+    };
+    if options.inbetweens == 0 {
+        bail!("--inbetweens must be at least 1");
+    }
+    let inputs = vec![a.rig.clone()];
+    let mut outputs = Plan::new(&inputs)
+        .force(a.force)
+        .output("--out", &a.out, Kind::Mesh)
+        .output_opt("--report", a.report.as_ref(), Kind::Json)
+        .check()?;
+    crate::outputs::check_asset_flags(&a.out)?;
+    crate::util::announce_reading(&inputs);
+    let mut asset = GltfAsset::read(
+        &a.rig,
+        &GltfReadOptions {
+            mesh: a.mesh.clone(),
+        },
+    )?;
+    asset.set_max_targets(crate::outputs::asset_max_targets());
+    asset.check_bakeable()?;
+    let m = asset.morphs().clone();
+    if m.targets.is_empty() {
+        bail!("{}: the mesh has no morph targets to bake", a.rig.display());
+    }
+    // Before the solves: the room for every shape the bake may add.
+    let n = m.targets.len();
+    let most = n * options.inbetweens
+        + options.max_pairs.min(n * (n - 1) / 2) * options.pair_samples.len();
+    asset.check_room(most).context(
+        "the bake adds in-betweens and combination shapes; lower --inbetweens or --max-pairs",
+    )?;
+    let named = std::iter::once(("base".to_string(), m.base.positions.clone()))
+        .chain(m.target_names.iter().cloned().zip(m.targets.clone()))
+        .collect();
+    let shapes = ShapeSet::new(m.base.clone(), named)
+        .with_context(|| format!("{}: the morph targets", a.rig.display()))?;
+    let weld = Weld::of_shapes(&shapes, WELD_TOLERANCE);
+    let welded = weld.shapes(&shapes)?;
+    let threads = a
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .clamp(1, 64);
+    crate::util::announce_work("baking the physical blend", shapes.num_vertices());
+    let mut solver = PhysicalBlend::new(&welded, &BlendOptions::default())?;
+    let t_bake = Instant::now();
+    let baked = bake(&mut solver, &options, threads)?.unweld(&weld, &welded);
+    let bake_seconds = t_bake.elapsed().as_secs_f64();
+    asset.add_bake(&baked)?;
+    outputs.gltf_asset(&a.out, &asset, &inputs, 0)?;
+    let added = asset.morphs().targets.len() - n;
+    if let Some(r) = &a.report {
+        let report = json!({
+            "command": "bake",
+            "rig": a.rig.display().to_string(),
+            "output": a.out.display().to_string(),
+            "vertices": shapes.num_vertices(),
+            "welded_vertices": weld.merged(),
+            "sliders": n,
+            "inbetweens_per_target": options.inbetweens,
+            "combinations": baked.combinations.iter().map(|c| [c.targets.0, c.targets.1]).collect::<Vec<_>>(),
+            "targets_added": added,
+            "targets_total": asset.morphs().targets.len(),
+            "solves": n * options.inbetweens + n * (n - 1) / 2 * options.pair_samples.len(),
+            "threads": threads,
+            "timings": { "bake_seconds": bake_seconds, "total_seconds": start.elapsed().as_secs_f64() },
+        });
+        outputs.json(r, &report)?;
+    }
+    outputs.commit()?;
+    eprintln!(
+        "baked {n} targets into {} in-betweens and {} combination shapes ({added} targets added) in {}",
+        n * options.inbetweens,
+        added - n * options.inbetweens,
+        a.out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,173 @@
+//! Issue 56, "rigs with baked physical correctives": `morphkit bake` adds a rig's in-between
+//! and combination shapes to its glTF asset with the slider mapping in
+//! `mesh.extras.morphkitBake`. Played from the written file by that mapping (the evaluation
+//! docs/bake.md gives in JavaScript, written again here), the asset is the library's
+//! `BakedRig::evaluate` within f32 storage, hence the physical solve at the bake's samples.
+
+mod common;
+#[path = "../../morphkit/tests/common/gltf_asset.rs"]
+mod fixture;
+
+use common::*;
+use morphkit::geom::max_distance;
+use morphkit::io::{GltfAsset, GltfReadOptions};
+use morphkit::mesh::{ShapeSet, Weld, WELD_TOLERANCE};
+use morphkit::springs::{BlendOptions, PhysicalBlend, Weights};
+use serde_json::Value;
+
+fn body() -> GltfReadOptions {
+    GltfReadOptions {
+        mesh: Some("Body".into()),
+    }
+}
+
+/// The piecewise-linear hat of docs/bake.md: adds each shape's factor at `x` to `z`.
+fn hat(weights: &[f64], targets: &[usize], x: f64, z: &mut [f64]) {
+    if x == 0.0 {
+        return;
+    }
+    let k = weights
+        .iter()
+        .position(|&w| x <= w)
+        .unwrap_or(weights.len() - 1);
+    let a = if k == 0 { 0.0 } else { weights[k - 1] };
+    let s = (x - a) / (weights[k] - a);
+    z[targets[k]] += s;
+    if k > 0 {
+        z[targets[k - 1]] += 1.0 - s;
+    }
+}
+
+/// Every target's weight at slider weights `x`, from the asset's `morphkitBake` mapping.
+fn target_weights(map: &Value, x: &[f64], n_targets: usize) -> Vec<f64> {
+    let nums = |v: &Value| -> Vec<f64> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let ids = |v: &Value| -> Vec<usize> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_u64().unwrap() as usize)
+            .collect()
+    };
+    let mut z = vec![0.0; n_targets];
+    for ib in map["inbetweens"].as_array().unwrap() {
+        let s = ib["slider"].as_u64().unwrap() as usize;
+        hat(&nums(&ib["weights"]), &ids(&ib["targets"]), x[s], &mut z);
+    }
+    let total: f64 = x.iter().map(|v| v.max(0.0)).sum();
+    let damping = map["damping"].as_f64().unwrap();
+    for c in map["combinations"].as_array().unwrap() {
+        let ij = ids(&c["sliders"]);
+        let (a, b) = (x[ij[0]], x[ij[1]]);
+        let phi = if a > 0.0 && b > 0.0 {
+            4.0 * a * b * ((a + b) / total).min(1.0).powf(damping)
+        } else {
+            0.0
+        };
+        hat(&nums(&c["levels"]), &ids(&c["targets"]), phi, &mut z);
+    }
+    z
+}
+
+#[test]
+fn a_baked_asset_plays_the_bake_through_its_mapping() {
+    let d = tmp_dir("bake");
+    let input = d.join("in.glb");
+    fixture::write(&input, &fixture::standard(false, 100.0));
+    let out = d.join("baked.glb");
+    let report = d.join("bake.json");
+    let (_, err) = run_ok(&[
+        "bake",
+        "--rig",
+        s(&input),
+        "--inbetweens",
+        "3",
+        "--report",
+        s(&report),
+        "--out",
+        s(&out),
+    ]);
+    assert!(err.contains("baked 2 targets into 6 in-betweens"), "{err}");
+    fixture::assert_valid(&[&out]);
+    let a = GltfAsset::read(&out, &body()).unwrap();
+    let m = a.morphs();
+    // Two sliders, three in-betweens each, one pair with two levels.
+    assert_eq!(m.targets.len(), 2 + 6 + 2);
+    for n in [
+        "bend@0.25",
+        "bend@0.5",
+        "lift@0.75",
+        "bend+lift@1",
+        "bend+lift@4",
+    ] {
+        assert!(
+            m.target_names.iter().any(|t| t == n),
+            "{n} in {:?}",
+            m.target_names
+        );
+    }
+    let doc = fixture::json_of(&out);
+    let mesh = doc["meshes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|x| x["name"] == "Body")
+        .unwrap();
+    let map = &mesh["extras"]["morphkitBake"];
+    assert_eq!(map["sliders"], serde_json::json!(["bend", "lift"]));
+    // The same bake in the library, on the input.
+    let input_asset = GltfAsset::read(&input, &body()).unwrap();
+    let im = input_asset.morphs();
+    let named = std::iter::once(("base".to_string(), im.base.positions.clone()))
+        .chain(im.target_names.iter().cloned().zip(im.targets.clone()))
+        .collect();
+    let shapes = ShapeSet::new(im.base.clone(), named).unwrap();
+    let weld = Weld::of_shapes(&shapes, WELD_TOLERANCE);
+    let welded = weld.shapes(&shapes).unwrap();
+    let mut solver = PhysicalBlend::new(&welded, &BlendOptions::default()).unwrap();
+    let opts = morphkit::bake::BakeOptions {
+        inbetweens: 3,
+        ..Default::default()
+    };
+    let baked = morphkit::bake::bake(&mut solver, &opts, 1)
+        .unwrap()
+        .unweld(&weld, &welded);
+    let diag = shapes.base().bbox_diagonal();
+    for x in [
+        [0.25, 0.0],
+        [0.6, 0.0],
+        [0.0, 1.0],
+        [0.5, 0.5],
+        [0.8, 0.3],
+        [1.2, 0.9],
+    ] {
+        let z = target_weights(map, &x, m.targets.len());
+        let played = m.evaluate(&z);
+        let e = max_distance(&played, &baked.evaluate(&x)) / diag;
+        assert!(e <= 1e-6, "{x:?}: {e}");
+    }
+    // At the samples, the physical solve.
+    for x in [[0.5, 0.0], [0.5, 0.5], [1.0, 1.0]] {
+        let z = target_weights(map, &x, m.targets.len());
+        let w = Weights::Delta(x.to_vec());
+        let c = w.coefficients(3).unwrap();
+        let solve = weld.scatter_frame(&solver.solve(&w).unwrap().positions, &c);
+        let e = max_distance(&m.evaluate(&z), &solve) / diag;
+        assert!(e <= 1e-6, "{x:?}: {e}");
+    }
+    let r: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(r["targets_added"], 8);
+    // A baked asset is not baked again (refused before any solve: the first message is the
+    // error); other outputs than glTF are refused.
+    let e = fails(&["bake", "--rig", s(&out), "--out", s(&d.join("again.glb"))]);
+    assert!(e.contains("already baked") && !e.contains("baking"), "{e}");
+    let e = fails(&["bake", "--rig", s(&input), "--out", s(&d.join("x.obj"))]);
+    assert!(e.contains(".glb or .gltf"), "{e}");
+    assert!(!d.join("again.glb").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
