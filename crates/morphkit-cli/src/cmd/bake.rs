@@ -2,7 +2,7 @@
 //! that a DCC or an engine plays the physical look live at the cost of a linear blend. The
 //! asset comes back whole with the in-between and combination shapes added as morph targets
 //! and the mapping from its sliders to them in `mesh.extras.morphkitBake`
-//! ([`morphkit::io::GltfAsset::add_bake`]; the client's evaluation is in docs/bake.md). The
+//! ([`morphkit::bake::add_to_gltf`]; the client's evaluation is in docs/bake.md). The
 //! shapes are [`morphkit::bake::bake`]'s, on the welded rig, written in the asset's layout.
 
 use crate::outputs::{Kind, Plan};
@@ -87,7 +87,7 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
         },
     )?;
     asset.set_max_targets(crate::outputs::asset_max_targets());
-    asset.check_bakeable()?;
+    morphkit::bake::check_gltf(&asset)?;
     let m = asset.morphs().clone();
     if m.targets.is_empty() {
         bail!("{}: the mesh has no morph targets to bake", a.rig.display());
@@ -115,7 +115,7 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
     let t_bake = Instant::now();
     let baked = bake(&mut solver, &options, threads)?.unweld(&weld, &welded);
     let bake_seconds = t_bake.elapsed().as_secs_f64();
-    asset.add_bake(&baked)?;
+    morphkit::bake::add_to_gltf(&mut asset, &baked)?;
     outputs.gltf_asset(&a.out, &asset, &inputs, 0)?;
     let added = asset.morphs().targets.len() - n;
     if let Some(r) = &a.report {

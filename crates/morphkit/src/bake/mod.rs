@@ -34,8 +34,11 @@ use crate::mesh::{Point, Weld};
 use crate::springs::{BlendError, PhysicalBlend, Weights};
 use crate::ShapeSet;
 
+mod gltf;
 #[cfg(test)]
 mod tests;
+
+pub use gltf::{add_to_gltf, check_gltf};
 
 /// How to bake.
 #[derive(Clone, Debug, PartialEq)]

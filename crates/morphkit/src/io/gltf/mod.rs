@@ -82,7 +82,6 @@ mod accessor;
 mod anim;
 mod asset;
 mod asset_anim;
-mod asset_bake;
 mod asset_edit;
 mod asset_write;
 mod budget;
