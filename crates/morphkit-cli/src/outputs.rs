@@ -104,9 +104,24 @@ pub fn asset_max_targets() -> usize {
 /// (with normal deltas where the asset has normals; [`io::GltfAsset`]), so `--quantize`,
 /// `--sparse-targets` and `--no-normals` would be ignored.
 pub fn check_asset_flags(out: &Path) -> anyhow::Result<()> {
+    refuse_asset_flags(out, false)
+}
+
+/// [`check_asset_flags`] for an edit that adds a compact clip: `--quantize` applies to its
+/// corrective targets ([`io::CompactEncoding::quantize`]), the others are refused.
+pub fn check_compact_asset_flags(out: &Path) -> anyhow::Result<()> {
+    refuse_asset_flags(out, true)
+}
+
+/// Whether `--quantize` was given.
+pub fn quantize_flag() -> bool {
+    context().flags.quantize
+}
+
+fn refuse_asset_flags(out: &Path, quantize_applies: bool) -> anyhow::Result<()> {
     let f = context().flags;
     let given: Vec<&str> = [
-        (f.quantize, "--quantize"),
+        (f.quantize && !quantize_applies, "--quantize"),
         (f.sparse_targets, "--sparse-targets"),
         (f.no_normals, "--no-normals"),
     ]
@@ -336,7 +351,20 @@ impl Outputs {
         inputs: &[PathBuf],
         frames: usize,
     ) -> anyhow::Result<()> {
-        check_asset_flags(path)?;
+        self.gltf_asset_with(path, asset, inputs, frames, false)
+    }
+
+    /// [`Outputs::gltf_asset`]; `compact`: the edit adds a compact clip, which `--quantize`
+    /// applies to ([`check_compact_asset_flags`]).
+    pub fn gltf_asset_with(
+        &mut self,
+        path: &Path,
+        asset: &io::GltfAsset,
+        inputs: &[PathBuf],
+        frames: usize,
+        compact: bool,
+    ) -> anyhow::Result<()> {
+        refuse_asset_flags(path, compact)?;
         let opts = frames_options(
             &FramesOptions {
                 inputs: inputs.to_vec(),
