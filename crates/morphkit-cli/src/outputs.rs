@@ -38,6 +38,8 @@ pub struct OutputFlags {
     /// Quantize .glb/.gltf output (KHR_mesh_quantization, which viewers must support):
     /// positions and morph deltas as 16-bit integers scaled by the node (within 2.7e-5 of the
     /// bounding-box diagonal), normals and normal deltas as 8-bit integers. About half the size.
+    /// With `blend --rig X --out Y.glb`: the compact clip's corrective targets as 16-bit
+    /// (the asset's own data stays as it is).
     #[arg(long, global = true)]
     pub quantize: bool,
     /// Store each morph target of .glb/.gltf output as a sparse accessor listing only the
