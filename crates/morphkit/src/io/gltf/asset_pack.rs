@@ -183,7 +183,7 @@ impl GltfAsset {
         let fine = tolerance / r;
         move |shape: &[Point]| {
             let a = peak(shape);
-            if !quantize || !(a > 0.0 && a.is_finite()) {
+            if !(quantize && a > 0.0 && a.is_finite()) {
                 return (1.0, Grid::F32);
             }
             // 2 % above the normals' peak: the stored coefficients' peak differs from `c` by
