@@ -86,6 +86,25 @@ if command -v blender >/dev/null 2>&1; then
   node "$here/check.mjs" --tol 1.001e-3 --shots "$out/shots" \
     "$out/artist-compact.glb" "$out/artist-physical" \
     "$out/long-compact.glb" "$out/long-compact" | tee -a "$out/results.jsonl"
+  # Smaller correctives: 16-bit (--quantize, KHR_mesh_quantization), and meshopt-compressed
+  # like their input when gltfpack (tools/gltf-assets) packs the rig (-c, unquantized so that
+  # the node keeps no dequantization transform and the OBJ frames stay comparable).
+  "$bin" --quantize blend --rig "$out/artist-rig.glb" --weights-file "$out/long-weights.csv" \
+    --fps 30 --out "$out/long-quantized.glb" --force
+  pairs=("$out/long-quantized.glb" "$out/long-compact")
+  gltfpack="$here/../gltf-assets/node_modules/.bin/gltfpack"
+  if [ -x "$gltfpack" ]; then
+    "$gltfpack" -i "$out/artist-rig.glb" -o "$out/artist-meshopt.glb" -c -noq -kn -km -ke >/dev/null
+    "$bin" --quantize blend --rig "$out/artist-meshopt.glb" --weights-file "$out/long-weights.csv" \
+      --fps 30 --out "$out/long-meshopt.glb" --force
+    "$bin" blend --rig "$out/artist-meshopt.glb" --weights-file "$out/long-weights.csv" \
+      --fps 30 --out "$out/long-meshopt" --force
+    pairs+=("$out/long-meshopt.glb" "$out/long-meshopt")
+  else
+    echo "threejs-check: no gltfpack (npm ci in tools/gltf-assets); the meshopt clip is skipped" >&2
+  fi
+  node "$here/check.mjs" --tol 1.001e-3 --shots "$out/shots" "${pairs[@]}" \
+    | tee -a "$out/results.jsonl"
   # The interactive mode (issue 38) on the textured asset: the clip a TD bakes from the slider
   # previews plays like the OBJ frames of the same interactive blend.
   "$bin" blend --rig "$out/artist-rig.glb" --weights-file "$out/artist-weights.csv" \

@@ -38,6 +38,8 @@ pub struct OutputFlags {
     /// Quantize .glb/.gltf output (KHR_mesh_quantization, which viewers must support):
     /// positions and morph deltas as 16-bit integers scaled by the node (within 2.7e-5 of the
     /// bounding-box diagonal), normals and normal deltas as 8-bit integers. About half the size.
+    /// With `blend --rig X --out Y.glb`: the compact clip's corrective targets as 16-bit
+    /// (the asset's own data stays as it is).
     #[arg(long, global = true)]
     pub quantize: bool,
     /// Store each morph target of .glb/.gltf output as a sparse accessor listing only the
@@ -104,9 +106,24 @@ pub fn asset_max_targets() -> usize {
 /// (with normal deltas where the asset has normals; [`io::GltfAsset`]), so `--quantize`,
 /// `--sparse-targets` and `--no-normals` would be ignored.
 pub fn check_asset_flags(out: &Path) -> anyhow::Result<()> {
+    refuse_asset_flags(out, false)
+}
+
+/// [`check_asset_flags`] for an edit that adds a compact clip: `--quantize` applies to its
+/// corrective targets ([`io::CompactEncoding::quantize`]), the others are refused.
+pub fn check_compact_asset_flags(out: &Path) -> anyhow::Result<()> {
+    refuse_asset_flags(out, true)
+}
+
+/// Whether `--quantize` was given.
+pub fn quantize_flag() -> bool {
+    context().flags.quantize
+}
+
+fn refuse_asset_flags(out: &Path, quantize_applies: bool) -> anyhow::Result<()> {
     let f = context().flags;
     let given: Vec<&str> = [
-        (f.quantize, "--quantize"),
+        (f.quantize && !quantize_applies, "--quantize"),
         (f.sparse_targets, "--sparse-targets"),
         (f.no_normals, "--no-normals"),
     ]
@@ -336,7 +353,20 @@ impl Outputs {
         inputs: &[PathBuf],
         frames: usize,
     ) -> anyhow::Result<()> {
-        check_asset_flags(path)?;
+        self.gltf_asset_with(path, asset, inputs, frames, false)
+    }
+
+    /// [`Outputs::gltf_asset`]; `compact`: the edit adds a compact clip, which `--quantize`
+    /// applies to ([`check_compact_asset_flags`]).
+    pub fn gltf_asset_with(
+        &mut self,
+        path: &Path,
+        asset: &io::GltfAsset,
+        inputs: &[PathBuf],
+        frames: usize,
+        compact: bool,
+    ) -> anyhow::Result<()> {
+        refuse_asset_flags(path, compact)?;
         let opts = frames_options(
             &FramesOptions {
                 inputs: inputs.to_vec(),

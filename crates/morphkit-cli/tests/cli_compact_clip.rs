@@ -6,7 +6,9 @@
 //! The long clip is made as users' files are: a tube rig with 16 targets and a 300-key weights
 //! animation (tests/common/gltf_asset.rs), quantized and meshopt-compressed by gltfpack
 //! (`tools/gltf-assets`, skipped without node unless MORPHKIT_REQUIRE_GLTF_TOOLS is set). The
-//! solved frames it is checked against come from the same blend written as a point cache.
+//! solved frames it is checked against come from the same blend written as a point cache. The
+//! output is packed as its input is: 16-bit correctives, meshopt-compressed
+//! (`asset_pack.rs`); `--quantize` quantizes the correctives of an `f32` asset.
 
 mod common;
 #[path = "../../morphkit/tests/common/gltf_asset.rs"]
@@ -96,6 +98,34 @@ fn a_compact_clip_plays_the_solve_within_its_tolerance() {
     let clip2 = report_clip(&report2);
     assert!(clip2["corrective_targets"].as_u64().unwrap() as usize >= k);
     assert!(clip2["max_error"].as_f64().unwrap() <= 1e-6, "{clip2}");
+    // --quantize: 16-bit correctives (the asset is f32), within the tolerance as played.
+    let quantized = d.join("quantized.glb");
+    let report3 = d.join("quantized.json");
+    ok(&[
+        &["--quantize"],
+        &rig[..],
+        &["--report", s(&report3), "--out", s(&quantized)],
+    ]
+    .concat());
+    fixture::assert_valid(&[&quantized]);
+    let clip3 = report_clip(&report3);
+    assert_eq!(clip3["quantized"], true, "{clip3}");
+    let (got, _) = played(&quantized, "Wave-physical");
+    let mut worst3: f64 = 0.0;
+    for (g, w) in got.iter().zip(&want) {
+        worst3 = worst3.max(max_distance(g, w) / diag);
+    }
+    assert!(worst3 <= 1e-3, "{worst3}");
+    assert!((clip3["max_error"].as_f64().unwrap() - worst3).abs() <= 1e-6);
+    let size = |p: &Path| std::fs::metadata(p).unwrap().len();
+    eprintln!(
+        "3 keys: f32 {} bytes, quantized {} bytes, {} and {} correctives",
+        size(&out),
+        size(&quantized),
+        k,
+        clip3["corrective_targets"]
+    );
+    assert!(size(&quantized) < size(&out));
     // No room for a corrective: refused before any solve, saying what to do; and a room too
     // small for the tolerance, after the solve, saying how far off that room leaves a frame.
     let e = fails(
@@ -274,7 +304,7 @@ fn a_long_clip_of_many_targets_stays_small_from_a_packed_input() {
             assert!(st.success());
             packed
         }
-        None => plain,
+        None => plain.clone(),
     };
     let out = d.join("physical.glb");
     let report = d.join("r.json");
@@ -298,21 +328,28 @@ fn a_long_clip_of_many_targets_stays_small_from_a_packed_input() {
     let clip = report_clip(&report);
     let k = clip["corrective_targets"].as_u64().unwrap();
     assert!(k >= 1, "{clip}");
-    // Compact: the output adds the correctives (a position and a normal delta per vertex,
-    // f32) and the keys, nothing more, and far fewer correctives than frames (one target per
-    // frame would add 300 targets).
     let (size_in, size_out) = (
         std::fs::metadata(&input).unwrap().len(),
         std::fs::metadata(&out).unwrap().len(),
     );
-    let v = a.morphs().base.num_vertices() as u64;
-    let added = k * v * 24 + 300 * (16 + k) * 4;
     eprintln!("input {size_in} bytes, compact output {size_out} bytes, {k} correctives, worst {worst:.2e}");
+    // Far fewer correctives than frames (one target per frame would add 300 targets).
     assert!(k <= 300 / 4, "{k} correctives");
-    assert!(
-        size_out <= size_in + added + added / 4,
-        "{size_out} vs {size_in} + {added}"
-    );
+    if input == plain {
+        // Unpacked: f32 correctives (a position and a normal delta per vertex) and keys.
+        let v = a.morphs().base.num_vertices() as u64;
+        let added = k * v * 24 + 300 * (16 + k) * 4;
+        assert!(
+            size_out <= size_in + added + added / 4,
+            "{size_out} vs {size_in} + {added}"
+        );
+    } else {
+        // Packed as the input is: 16-bit correctives, meshopt-compressed with the weights
+        // (270 KB for 46 correctives, 7.9× the input; 943 KB as f32).
+        assert_eq!(clip["quantized"], true, "{clip}");
+        assert_eq!(clip["meshopt"], "EXT_meshopt_compression", "{clip}");
+        assert!(size_out <= 8 * size_in, "{size_out} vs {size_in}");
+    }
     fixture::assert_valid(&[&out]);
     let _ = std::fs::remove_dir_all(&d);
 }

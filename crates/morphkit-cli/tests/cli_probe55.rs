@@ -149,8 +149,19 @@ fn flags_that_would_do_nothing_are_refused() {
             "{e}"
         );
     }
-    let e = fails(&["blend", "--rig", s(&glb), "--quantize", "--out", s(&copy)]);
+    // --quantize applies to a compact clip's correctives, not to one target per frame.
+    let per_frame = ["--per-frame-targets", "--quantize", "--out", s(&copy)];
+    let e = fails(&[&["blend", "--rig", s(&glb)][..], &per_frame[..]].concat());
     assert!(e.contains("--quantize not applied"), "{e}");
+    let e = fails(&[
+        "blend",
+        "--rig",
+        s(&glb),
+        "--sparse-targets",
+        "--out",
+        s(&copy),
+    ]);
+    assert!(e.contains("--sparse-targets not applied"), "{e}");
     assert!(!copy.exists());
     ok(&["convert", s(&glb), s(&copy)]);
 }

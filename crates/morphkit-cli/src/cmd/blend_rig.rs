@@ -115,7 +115,11 @@ pub(super) fn read(a: &BlendArgs, path: &Path) -> anyhow::Result<(Rig, ShapeSet)
         }
     };
     if carries(&a.out) {
-        crate::outputs::check_asset_flags(&a.out)?;
+        if a.per_frame_targets {
+            crate::outputs::check_asset_flags(&a.out)?;
+        } else {
+            crate::outputs::check_compact_asset_flags(&a.out)?;
+        }
         asset.set_max_targets(crate::outputs::asset_max_targets());
         if a.per_frame_targets {
             asset.check_frame_animation(&clip, &times, weights.len())?;

@@ -96,7 +96,9 @@ pub(super) fn write(
         add_compact_clip(&mut frames)?
     };
     let rig = &frames.rig;
-    outputs.gltf_asset(&frames.args.out, &rig.asset, inputs, frames.positions.len())?;
+    let compact = !frames.args.per_frame_targets;
+    let n = frames.positions.len();
+    outputs.gltf_asset_with(&frames.args.out, &rig.asset, inputs, n, compact)?;
     let how = match summary["corrective_targets"].as_u64() {
         Some(k) => format!(
             "the asset's {} targets at the clip's weights and {k} corrective targets, within {:.2e} of the diagonal",
@@ -127,8 +129,12 @@ fn add_physical_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
 /// weights, plus the fewest corrective targets ([`morphkit::clip::residual_basis`] of the
 /// frames' residuals against the linear blend) that bring every vertex of every frame within
 /// `--clip-tolerance` of the solve, as many as `--max-targets` leaves room for
-/// ([`morphkit::io::GltfAsset::add_compact_animation`]). The error reported is measured on
-/// what a viewer plays: the stored targets at the stored (f32) key weights.
+/// ([`morphkit::io::GltfAsset::add_compact_animation`]). The correctives are stored as small
+/// as the asset's own data: quantized when the asset uses `KHR_mesh_quantization` or
+/// `--quantize` is given, meshopt-compressed when the asset is
+/// ([`morphkit::io::CompactEncoding`]); each is rounded to its storage grid before the next is
+/// found ([`morphkit::clip::residual_basis_on`]). The error reported is measured on what a
+/// viewer plays: the stored targets at the stored (f32) key weights.
 fn add_compact_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
     let relative = frames
         .args
@@ -150,13 +156,17 @@ fn add_compact_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
         weights.push(c[1..=n_targets].to_vec());
     }
     let asset = &mut frames.rig.asset;
+    let mut encoding = asset.compact_encoding();
+    encoding.quantize |= crate::outputs::quantize_flag();
     let have = asset.morphs().targets.len();
     let room = match asset.max_targets() {
         0 => usize::MAX,
         m => m.saturating_sub(have),
     };
+    let tolerance = relative * diagonal;
+    let grid = asset.corrective_grid(&encoding, tolerance);
     let basis =
-        clip::residual_basis(&residuals, relative * diagonal, room).map_err(|e| match e {
+        clip::residual_basis_on(&residuals, tolerance, room, grid).map_err(|e| match e {
             ClipError::TooManyShapes { frame, error, .. } => anyhow::anyhow!(
                 "{}: the compact clip '{}' needs more corrective targets than the {room} that \
              --max-targets leaves beside the asset's {have} (with {room}, frame {frame} is \
@@ -168,7 +178,8 @@ fn add_compact_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
             ),
             e => anyhow::anyhow!("{}: the compact clip: {e}", asset.path().display()),
         })?;
-    asset.add_compact_animation(&frames.rig.clip, &frames.rig.times, &weights, &basis)?;
+    let (name, times) = (&frames.rig.clip, &frames.rig.times);
+    asset.add_compact_animation(name, times, &weights, &basis, &encoding)?;
     // What a viewer plays: the stored targets at the stored key weights.
     let anim = asset
         .weight_animation(Some(&frames.rig.clip))?
@@ -185,6 +196,8 @@ fn add_compact_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
         "kind": "compact",
         "asset_targets": n_targets,
         "corrective_targets": basis.shapes.len(),
+        "quantized": encoding.quantize,
+        "meshopt": encoding.meshopt,
         "tolerance": relative,
         "max_error": worst / diagonal,
         "worst_frame": worst_frame,

@@ -16,10 +16,14 @@
 //!    minimise: shapes are taken in that order until every frame is within it. When the
 //!    directions run out before that (rounding), the worst frame's own remainder is the next
 //!    shape (a pivoted Gram–Schmidt step), which brings that frame to zero.
-//! 3. Each shape is stored as `f32` (what a glTF target holds), scaled so that its largest
-//!    coefficient over the clip is 1 (an ordinary slider range); the coefficients are the
-//!    projections of what remains onto the stored shape, also rounded to `f32`. The error
-//!    reported is that of the stored numbers, not of the exact SVD.
+//! 3. Each shape is rounded to the grid it will be stored on before anything is projected on
+//!    it: `f32` (what a plain glTF target holds; [`residual_basis`], scaled so that its
+//!    largest coefficient over the clip is 1, an ordinary slider range), or a [`Grid`] and a
+//!    scale that a caller chooses per shape ([`residual_basis_on`]: 16-bit integers, as
+//!    `KHR_mesh_quantization` stores a target). The coefficients are the projections of what
+//!    remains onto the stored shape, rounded to `f32`, so later shapes absorb the rounding of
+//!    earlier ones, and the error reported is that of the stored numbers, not of the exact
+//!    SVD.
 //!
 //! The computation is sequential (faer without threads), so the same frames give the same
 //! shapes, bytes included, on any machine load.
@@ -79,13 +83,49 @@ pub enum ClipError {
     },
 }
 
+/// The numbers a shape's coordinates are rounded to before it is used (glTF 2.0 §3.6.2.2 and
+/// `KHR_mesh_quantization`: the component types a morph target's `POSITION` may have).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Grid {
+    /// `f32` values (`FLOAT`).
+    F32,
+    /// `q / 32767` for an integer `q` in `[−32767, 32767]`: a normalized `SHORT`, decoded as
+    /// glTF decodes it (§3.11), so in `[−1, 1]`.
+    I16Normalized,
+    /// An integer in `[−32767, 32767]`: an unnormalized `SHORT`.
+    I16,
+}
+
+impl Grid {
+    /// `x` rounded to the grid (to nearest; integer grids clamp to their range).
+    pub fn round(self, x: f64) -> f64 {
+        match self {
+            Grid::F32 => x as f32 as f64,
+            Grid::I16Normalized => (x * 32767.0).round().clamp(-32767.0, 32767.0) / 32767.0,
+            Grid::I16 => x.round().clamp(-32767.0, 32767.0),
+        }
+    }
+
+    /// The stored integer of a value on an integer grid (`x` as [`Grid::round`] gives it).
+    pub fn integer(self, x: f64) -> i16 {
+        match self {
+            Grid::I16Normalized => (x * 32767.0).round().clamp(-32767.0, 32767.0) as i16,
+            _ => x.round().clamp(-32767.0, 32767.0) as i16,
+        }
+    }
+}
+
 /// `K` shapes and their coefficients: frame `f` is `Σₖ coefficients[f][k] · shapes[k]` within
 /// [`ClipBasis::max_error`] at every vertex.
 #[derive(Clone, Debug)]
 pub struct ClipBasis {
-    /// `K` shapes of `#V` displacements, each coordinate an `f32` value. Each is scaled so that
-    /// its largest coefficient magnitude over the frames is 1 (and that coefficient positive).
+    /// `K` shapes of `#V` displacements, each coordinate a value of its grid
+    /// ([`ClipBasis::grids`]). With [`residual_basis`], each is scaled so that its largest
+    /// coefficient magnitude over the frames is 1 (and that coefficient positive); with
+    /// [`residual_basis_on`], that coefficient is the scale the caller chose (see there).
     pub shapes: Vec<Vec<Point>>,
+    /// Per shape: the grid its coordinates are on.
+    pub grids: Vec<Grid>,
     /// `F` rows of `K` coefficients, each an `f32` value.
     pub coefficients: Vec<Vec<f64>>,
     /// The largest distance, over every vertex of every frame, between a frame and its
@@ -135,6 +175,23 @@ pub fn residual_basis(
     tolerance: f64,
     max_shapes: usize,
 ) -> Result<ClipBasis, ClipError> {
+    residual_basis_on(frames, tolerance, max_shapes, |_| (1.0, Grid::F32))
+}
+
+/// [`residual_basis`] with shapes stored on a grid that `grid` chooses per shape: given the
+/// shape as it would be at coefficient 1 (its largest coefficient over the frames, `#V`
+/// displacements, not yet rounded), it returns `(scale, grid)`, and the shape stored is that
+/// shape divided by `scale` (a positive finite number; others are taken as 1) and rounded to
+/// `grid`. Its largest coefficient is then about `scale`. The coefficients are projected on
+/// the stored shape, so the error reported is that of the stored numbers.
+///
+/// Errors: those of [`residual_basis`].
+pub fn residual_basis_on(
+    frames: &[Vec<Point>],
+    tolerance: f64,
+    max_shapes: usize,
+    mut grid: impl FnMut(&[Point]) -> (f64, Grid),
+) -> Result<ClipBasis, ClipError> {
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(ClipError::Tolerance(tolerance));
     }
@@ -164,6 +221,7 @@ pub fn residual_basis(
     }
     let directions = principal_directions(&rest, d);
     let mut shapes: Vec<Vec<f64>> = Vec::new();
+    let mut grids: Vec<Grid> = Vec::new();
     let mut coefficients: Vec<Vec<f64>> = vec![Vec::new(); nf];
     let mut errors: Vec<f64> = rest.iter().map(|r| row_max(r)).collect();
     let mut next = directions.into_iter();
@@ -186,16 +244,16 @@ pub fn residual_basis(
         }
         // The next principal direction, or the worst frame's own remainder.
         let dir = next.next().unwrap_or_else(|| rest[worst].clone());
-        let Some(shape) = stored_shape(&rest, &dir) else {
+        let shape = match stored_shape(&rest, &dir, &mut grid) {
+            Some(s) => s,
             // A direction nothing projects on (rounded to zero): take the pivot instead.
-            let Some(shape) = stored_shape(&rest, &rest[worst].clone()) else {
-                break;
-            };
-            add_shape(shape, &mut rest, &mut coefficients, &mut shapes);
-            errors = rest.iter().map(|r| row_max(r)).collect();
-            continue;
+            None => match stored_shape(&rest, &rest[worst].clone(), &mut grid) {
+                Some(s) => s,
+                None => break,
+            },
         };
-        add_shape(shape, &mut rest, &mut coefficients, &mut shapes);
+        grids.push(shape.1);
+        add_shape(shape.0, &mut rest, &mut coefficients, &mut shapes);
         errors = rest.iter().map(|r| row_max(r)).collect();
     }
     let (worst_frame, max_error) = errors
@@ -209,15 +267,21 @@ pub fn residual_basis(
             .into_iter()
             .map(|s| s.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect())
             .collect(),
+        grids,
         coefficients,
         max_error,
         worst_frame,
     })
 }
 
-/// The shape along `dir` as stored: scaled so that the largest projection of a remainder on it
-/// is +1, rounded to `f32`. `None` when nothing projects on it.
-fn stored_shape(rest: &[Vec<f64>], dir: &[f64]) -> Option<Vec<f64>> {
+/// The shape along `dir` as stored, and its grid: scaled so that the largest projection of a
+/// remainder on it is +1, then divided by the scale `grid` chooses and rounded to its grid.
+/// `None` when nothing projects on it (or it rounds to zero).
+fn stored_shape(
+    rest: &[Vec<f64>],
+    dir: &[f64],
+    grid: &mut impl FnMut(&[Point]) -> (f64, Grid),
+) -> Option<(Vec<f64>, Grid)> {
     let norm2 = dot(dir, dir);
     if !(norm2 > 0.0 && norm2.is_finite()) {
         return None;
@@ -231,8 +295,18 @@ fn stored_shape(rest: &[Vec<f64>], dir: &[f64]) -> Option<Vec<f64>> {
     if c == 0.0 || !c.is_finite() {
         return None;
     }
-    let shape: Vec<f64> = unit.iter().map(|x| (x * c) as f32 as f64).collect();
-    (dot(&shape, &shape) > 0.0).then_some(shape)
+    let peak: Vec<Point> = unit
+        .chunks_exact(3)
+        .map(|u| [u[0] * c, u[1] * c, u[2] * c])
+        .collect();
+    let (scale, g) = grid(&peak);
+    let scale = if scale.is_finite() && scale > 0.0 {
+        scale
+    } else {
+        1.0
+    };
+    let shape: Vec<f64> = unit.iter().map(|x| g.round(x * c / scale)).collect();
+    (dot(&shape, &shape) > 0.0).then_some((shape, g))
 }
 
 /// Appends `shape`: each remainder's projection on it, rounded to `f32`, becomes its

@@ -151,3 +151,52 @@ fn bad_input_is_refused_with_its_place() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn shapes_on_an_integer_grid_report_the_error_of_the_stored_numbers() {
+    let fr = frames(40, 30, 4, 0.001, 5);
+    let tol = 0.02;
+    // (grid, the least scale, the range of its integers in the shape's units).
+    for (grid, least, range) in [
+        (Grid::I16Normalized, 0.5, 1.0),
+        (Grid::I16, tol / 16.0, 32767.0),
+    ] {
+        let mut scales = Vec::new();
+        let b = residual_basis_on(&fr, tol, 100, |shape| {
+            assert_eq!(shape.len(), 30);
+            let s = f64::max(least, peak_of(shape) / range);
+            scales.push(s);
+            (s, grid)
+        })
+        .unwrap();
+        assert_eq!(scales.len(), b.shapes.len());
+        assert!(b.grids.iter().all(|g| *g == grid));
+        // Every coordinate is on the grid, and the error is that of these numbers.
+        for x in b.shapes.iter().flatten().flatten() {
+            assert_eq!(grid.round(*x), *x);
+        }
+        let w = worst(&fr, &b);
+        assert!(
+            w <= tol && (w - b.max_error).abs() <= 1e-12,
+            "{w} vs {}",
+            b.max_error
+        );
+        // The largest coefficient of each shape is the scale asked for, but for rounding.
+        for (k, want) in scales.iter().enumerate() {
+            let c = b
+                .coefficients
+                .iter()
+                .map(|r| r[k].abs())
+                .fold(0.0, f64::max);
+            assert!(
+                (c / want - 1.0).abs() < 1e-2,
+                "{grid:?} shape {k}: {c} vs {want}"
+            );
+        }
+    }
+}
+
+/// The largest absolute coordinate of `p`.
+fn peak_of(p: &[Point]) -> f64 {
+    p.iter().flatten().fold(0.0, |m, x| m.max(x.abs()))
+}

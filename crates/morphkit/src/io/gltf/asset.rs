@@ -85,6 +85,8 @@ pub struct GltfAsset {
     pub(super) buffers: Vec<Vec<u8>>,
     pub(super) fallback: Vec<bool>,
     pub(super) edit_buffer: Option<usize>,
+    /// The meshopt `fallback` buffer of the edits' compressed views (see `asset_pack.rs`).
+    pub(super) edit_fallback: Option<usize>,
     /// Per image: the bytes and media type of an external file, to embed on writing.
     pub(super) images: Vec<Option<ImageData>>,
     pub(super) mesh: usize,
@@ -316,6 +318,7 @@ impl GltfAsset {
             buffers,
             fallback,
             edit_buffer: None,
+            edit_fallback: None,
             images,
             mesh,
             primitives,

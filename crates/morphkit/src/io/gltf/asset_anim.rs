@@ -6,6 +6,7 @@
 
 use super::asset::{GltfAsset, GltfWeightAnimation, WeightSampler};
 use super::asset_edit::{push, FLOAT};
+use super::asset_pack::CompactEncoding;
 use crate::clip::ClipBasis;
 use crate::io::IoError;
 use crate::mesh::Point;
@@ -93,15 +94,22 @@ impl GltfAsset {
         for (k, &t) in at.iter().enumerate() {
             rows[k * n + t] = 1.0;
         }
-        self.put_animation(clip_name, times, &rows);
+        self.put_animation(clip_name, times, &rows, None);
         Ok(())
     }
 
     /// Adds (or replaces, by name) the animation `clip_name` keying every target of the mesh
     /// with `rows` (`times.len()` rows of `#targets` weights), `LINEAR`, on every node using the
-    /// mesh, and records it as the asset's animations do. The caller has checked the keys
+    /// mesh, and records it as the asset's animations do; the output is compressed with the
+    /// extension `meshopt` when given. The caller has checked the keys
     /// ([`GltfAsset::check_clip_keys`]).
-    fn put_animation(&mut self, clip_name: &str, times: &[f64], rows: &[f32]) {
+    fn put_animation(
+        &mut self,
+        clip_name: &str,
+        times: &[f64],
+        rows: &[f32],
+        meshopt: Option<&str>,
+    ) {
         let nodes = self.mesh_nodes();
         let n = self.morphs.targets.len();
         let ts: Vec<f32> = times.iter().map(|&t| t as f32).collect();
@@ -113,7 +121,10 @@ impl GltfAsset {
             json!({"bufferView": tv, "componentType": FLOAT, "count": ts.len(), "type": "SCALAR",
                    "min": [ts[0]], "max": [ts[ts.len() - 1]]}),
         );
-        let output = self.weights(rows);
+        let output = match meshopt {
+            Some(ext) => self.packed_weights(rows, n, ext),
+            None => self.weights(rows),
+        };
         let channels: Vec<Value> = nodes
             .iter()
             .map(|&node| json!({"sampler": 0, "target": {"node": node, "path": "weights"}}))
@@ -162,8 +173,11 @@ impl GltfAsset {
     /// and `basis.shapes.len()` new corrective targets (displacements `basis.shapes[j]`, named
     /// `CLIP_corrective_00`, …) by `basis.coefficients[k]`, `LINEAR`. When `basis` spans the
     /// physical frames minus the linear blend of `weights`, the clip plays the physical frames
-    /// within its error; [`super::GltfMorphs::evaluate`] plays a key as a viewer does. Existing
-    /// animations weigh the correctives 0; an animation of the same name is replaced.
+    /// within its error; [`super::GltfMorphs::evaluate`] plays a key as a viewer does.
+    /// Existing animations weigh the correctives 0; an animation of the same name is replaced.
+    /// The correctives are stored on `basis.grids` and, like the weights, as `encoding` says
+    /// (`asset_pack.rs`: quantized, meshopt-compressed, or `f32`); the asset's
+    /// [`GltfAsset::morphs`] then holds the stored numbers.
     ///
     /// Errors: those of [`GltfAsset::check_clip_keys`] and [`GltfAsset::add_targets`];
     /// `weights` or `basis` rows of other counts than the keys, a row of other length than the
@@ -175,6 +189,7 @@ impl GltfAsset {
         times: &[f64],
         weights: &[Vec<f64>],
         basis: &ClipBasis,
+        encoding: &CompactEncoding,
     ) -> Result<(), IoError> {
         self.check_clip_keys(clip_name, times, weights.len())?;
         let bad = |m: String| IoError::content(&self.path, format!("animation '{clip_name}': {m}"));
@@ -204,18 +219,7 @@ impl GltfAsset {
                 }
             }
         }
-        let base = &self.morphs.base.positions;
-        let absolute: Vec<Vec<Point>> = basis
-            .shapes
-            .iter()
-            .map(|s| {
-                base.iter()
-                    .zip(s)
-                    .map(|(b, d)| [b[0] + d[0], b[1] + d[1], b[2] + d[2]])
-                    .collect()
-            })
-            .collect();
-        let at = self.add_targets_at(&names, &absolute)?;
+        let at = self.add_correctives(&names, basis, encoding)?;
         let n = self.morphs.targets.len();
         let mut rows = vec![0.0f32; weights.len() * n];
         for (k, (w, c)) in weights.iter().zip(&basis.coefficients).enumerate() {
@@ -227,7 +231,7 @@ impl GltfAsset {
                 row[t] = *x as f32;
             }
         }
-        self.put_animation(clip_name, times, &rows);
+        self.put_animation(clip_name, times, &rows, encoding.meshopt.as_deref());
         Ok(())
     }
 }

@@ -1,8 +1,8 @@
 //! Tests of the compact physical animation ([`GltfAsset::add_compact_animation`]): written,
 //! read back and played from the stored numbers, it gives the frames within the basis's error.
 
-use super::{GltfAsset, GltfAssetOptions, GltfReadOptions};
-use crate::clip::residual_basis;
+use super::{CompactEncoding, GltfAsset, GltfAssetOptions, GltfReadOptions};
+use crate::clip::{residual_basis, residual_basis_on, Grid};
 use crate::geom::max_distance;
 use crate::mesh::Point;
 use std::path::PathBuf;
@@ -16,16 +16,13 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
-#[test]
-fn a_compact_clip_plays_the_frames_within_its_error() {
-    let d = tmp("compact");
-    let p = d.join("a.glb");
-    fixture::write(&p, &fixture::standard(true, 1.0));
-    let mut a = GltfAsset::read(&p, &GltfReadOptions::default()).unwrap();
-    let m = a.morphs().clone();
+/// 30 frames for `a`'s mesh: the linear blend of its targets at smooth weights, plus a bend
+/// that the targets cannot make (the "physical" residual), of rank 2 over the clip. Returns
+/// the weights, the frames and their residuals against the linear blend.
+#[allow(clippy::type_complexity)]
+fn physical(a: &GltfAsset) -> (Vec<Vec<f64>>, Vec<Vec<Point>>, Vec<Vec<Point>>) {
+    let m = a.morphs();
     let n0 = m.targets.len();
-    // 30 frames: the linear blend of the targets at smooth weights, plus a bend that the
-    // targets cannot make (the "physical" residual), of rank 2 over the clip.
     let weights: Vec<Vec<f64>> = (0..30)
         .map(|k| {
             let t = k as f64 / 29.0;
@@ -57,6 +54,18 @@ fn a_compact_clip_plays_the_frames_within_its_error() {
                 .collect()
         })
         .collect();
+    (weights, frames, residuals)
+}
+
+#[test]
+fn a_compact_clip_plays_the_frames_within_its_error() {
+    let d = tmp("compact");
+    let p = d.join("a.glb");
+    fixture::write(&p, &fixture::standard(true, 1.0));
+    let mut a = GltfAsset::read(&p, &GltfReadOptions::default()).unwrap();
+    let (weights, frames, residuals) = physical(&a);
+    let m = a.morphs().clone();
+    let n0 = m.targets.len();
     let diag = m.base.bbox_diagonal();
     let basis = residual_basis(&residuals, 1e-4 * diag, 10).unwrap();
     assert_eq!(basis.shapes.len(), 2, "{} {}", basis.max_error, diag);
@@ -64,15 +73,27 @@ fn a_compact_clip_plays_the_frames_within_its_error() {
     // Rows that do not match are refused before anything changes.
     let e = a
         .clone()
-        .add_compact_animation("physical", &times[..29], &weights[..29], &basis)
+        .add_compact_animation(
+            "physical",
+            &times[..29],
+            &weights[..29],
+            &basis,
+            &CompactEncoding::default(),
+        )
         .unwrap_err()
         .to_string();
     assert!(
         e.contains("30 rows of corrective weights for 29 keys"),
         "{e}"
     );
-    a.add_compact_animation("physical", &times, &weights, &basis)
-        .unwrap();
+    a.add_compact_animation(
+        "physical",
+        &times,
+        &weights,
+        &basis,
+        &CompactEncoding::default(),
+    )
+    .unwrap();
     let out = d.join("b.glb");
     a.write(&out, &GltfAssetOptions::default()).unwrap();
     let b = GltfAsset::read(&out, &GltfReadOptions::default()).unwrap();
@@ -103,7 +124,13 @@ fn a_compact_clip_plays_the_frames_within_its_error() {
     let mut c = b.clone();
     let e = c
         .clone()
-        .add_compact_animation("physical", &times, &weights, &basis)
+        .add_compact_animation(
+            "physical",
+            &times,
+            &weights,
+            &basis,
+            &CompactEncoding::default(),
+        )
         .unwrap_err()
         .to_string();
     assert!(
@@ -113,20 +140,98 @@ fn a_compact_clip_plays_the_frames_within_its_error() {
         )),
         "{e}"
     );
-    c.add_compact_animation("physical", &times, &padded, &basis)
-        .unwrap();
+    c.add_compact_animation(
+        "physical",
+        &times,
+        &padded,
+        &basis,
+        &CompactEncoding::default(),
+    )
+    .unwrap();
     assert_eq!(c.morphs().targets.len(), n0 + 2);
     assert_eq!(c.weight_animations().len(), b.weight_animations().len());
     // ...but refuses to replace a corrective the clip itself weighs.
     let mut own = padded.clone();
     own[3][n0 + 1] = 0.5;
     let e = c
-        .add_compact_animation("physical", &times, &own, &basis)
+        .add_compact_animation(
+            "physical",
+            &times,
+            &own,
+            &basis,
+            &CompactEncoding::default(),
+        )
         .unwrap_err()
         .to_string();
     assert!(
         e.contains("weighs the target 'physical_corrective_01'"),
         "{e}"
     );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Quantized (`KHR_mesh_quantization`) and meshopt-compressed correctives: each is rounded to
+/// its 16-bit grid before its coefficients are projected, so what a reader decodes from the
+/// file plays the frames within the basis's error, and the file is smaller than with `f32`.
+#[test]
+fn quantized_compressed_correctives_play_the_stored_numbers() {
+    let d = tmp("compact-packed");
+    let p = d.join("a.glb");
+    fixture::write(&p, &fixture::standard(true, 1.0));
+    let a = GltfAsset::read(&p, &GltfReadOptions::default()).unwrap();
+    let (weights, frames, residuals) = physical(&a);
+    let n0 = a.morphs().targets.len();
+    let diag = a.morphs().base.bbox_diagonal();
+    let times: Vec<f64> = (0..30).map(|k| k as f64 / 30.0).collect();
+    let tol = 1e-4 * diag;
+    let mut sizes = Vec::new();
+    for (name, quantize, meshopt) in [
+        ("f32", false, None),
+        ("quantized", true, None),
+        ("packed", true, Some("EXT_meshopt_compression".to_string())),
+    ] {
+        let enc = CompactEncoding { quantize, meshopt };
+        let mut a = a.clone();
+        let basis = residual_basis_on(&residuals, tol, 10, a.corrective_grid(&enc, tol)).unwrap();
+        assert!(basis.max_error <= tol, "{name}: {}", basis.max_error);
+        let want = if quantize {
+            Grid::I16Normalized
+        } else {
+            Grid::F32
+        };
+        assert!(
+            basis.grids.iter().all(|g| *g == want),
+            "{name}: {:?}",
+            basis.grids
+        );
+        // Coefficients within Blender's shape-key range.
+        assert!(basis.coefficients.iter().flatten().all(|c| c.abs() <= 10.0));
+        a.add_compact_animation("physical", &times, &weights, &basis, &enc)
+            .unwrap();
+        let out = d.join(format!("{name}.glb"));
+        a.write(&out, &GltfAssetOptions::default()).unwrap();
+        fixture::assert_valid(&[&out]);
+        let b = GltfAsset::read(&out, &GltfReadOptions::default()).unwrap();
+        assert_eq!(b.morphs().targets, a.morphs().targets, "{name}");
+        let anim = b.weight_animation(Some("physical")).unwrap().unwrap();
+        for (k, (_, w)) in anim.keys.iter().enumerate() {
+            let e = max_distance(&b.morphs().evaluate(w), &frames[k]);
+            // The basis's error, and the f32 storage of the weights.
+            assert!(e <= basis.max_error + 1e-6 * diag, "{name}, frame {k}: {e}");
+        }
+        let doc = b.document();
+        let required = doc["extensionsRequired"]
+            .as_array()
+            .cloned()
+            .unwrap_or_default();
+        let has = |e: &str| required.iter().any(|x| x == e);
+        assert_eq!(has("KHR_mesh_quantization"), quantize, "{name}");
+        assert_eq!(has("EXT_meshopt_compression"), name == "packed", "{name}");
+        let target = &doc["meshes"][b.mesh_index()]["primitives"][0]["targets"][n0];
+        let acc = &doc["accessors"][target["POSITION"].as_u64().unwrap() as usize];
+        assert_eq!(acc["componentType"], if quantize { 5122 } else { 5126 });
+        sizes.push(std::fs::metadata(&out).unwrap().len());
+    }
+    assert!(sizes[1] < sizes[0] && sizes[2] < sizes[1], "{sizes:?}");
     let _ = std::fs::remove_dir_all(&d);
 }

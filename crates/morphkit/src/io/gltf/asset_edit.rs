@@ -27,7 +27,7 @@ pub(super) const FLOAT: u32 = 5126;
 const UNSIGNED_INT: u32 = 5125;
 
 /// `doc[key]` as an array, created when missing.
-fn array<'a>(doc: &'a mut Value, key: &str) -> &'a mut Vec<Value> {
+pub(super) fn array<'a>(doc: &'a mut Value, key: &str) -> &'a mut Vec<Value> {
     if !doc[key].is_array() {
         doc[key] = json!([]);
     }
@@ -56,7 +56,7 @@ pub(super) fn pad_runs(x: &[f64], old: usize, new: usize) -> Vec<f64> {
 
 impl GltfAsset {
     /// The index of the buffer edits write into (created on first use).
-    fn edit_buffer(&mut self) -> usize {
+    pub(super) fn edit_buffer(&mut self) -> usize {
         if let Some(b) = self.edit_buffer {
             return b;
         }
@@ -85,7 +85,7 @@ impl GltfAsset {
     }
 
     /// A VEC3 f32 accessor (with `min`/`max` when `bounds`); returns its index.
-    fn vec3(&mut self, p: &[[f32; 3]], bounds: bool) -> usize {
+    pub(super) fn vec3(&mut self, p: &[[f32; 3]], bounds: bool) -> usize {
         let bytes: Vec<u8> = p.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
         let view = self.view(&bytes, Some(ARRAY_BUFFER));
         let mut a =
@@ -140,7 +140,7 @@ impl GltfAsset {
     }
 
     /// The primitive's `(positions, local triangles)` in `positions` (`#V` of the merged mesh).
-    fn local(&self, p: usize, positions: &[Point]) -> (Vec<Point>, Vec<[u32; 3]>) {
+    pub(super) fn local(&self, p: usize, positions: &[Point]) -> (Vec<Point>, Vec<[u32; 3]>) {
         let prim = &self.primitives[p];
         let o = prim.vertices.start as u32;
         let tris = self.morphs.base.triangles[prim.triangles.clone()]
@@ -255,31 +255,8 @@ impl GltfAsset {
         names: &[String],
         positions: &[Vec<Point>],
     ) -> Result<Vec<usize>, IoError> {
-        self.check_room(0)?;
-        if names.len() != positions.len() {
-            return Err(IoError::content(
-                &self.path,
-                format!(
-                    "{} target names for {} targets",
-                    names.len(),
-                    positions.len()
-                ),
-            ));
-        }
-        for (i, n) in names.iter().enumerate() {
-            if names[..i].contains(n) {
-                return Err(IoError::content(
-                    &self.path,
-                    format!("the target name '{n}' is given twice"),
-                ));
-            }
-        }
+        self.check_new_targets(names, positions.len())?;
         let old = self.morphs.targets.len();
-        let fresh = names
-            .iter()
-            .filter(|n| !self.morphs.target_names.contains(n))
-            .count();
-        self.check_room(fresh)?;
         for (n, p) in names.iter().zip(positions) {
             self.check_positions(&format!("target '{n}'"), p)?;
         }
@@ -316,30 +293,10 @@ impl GltfAsset {
                 .zip(&delta)
                 .map(|(b, d)| [b[0] + d[0] as f64, b[1] + d[1] as f64, b[2] + d[2] as f64])
                 .collect();
-            let i = match self.morphs.target_names.iter().position(|n| n == name) {
-                Some(i) => {
-                    self.morphs.targets[i] = stored;
-                    i
-                }
-                None => {
-                    self.morphs.target_names.push(name.clone());
-                    self.morphs.targets.push(stored);
-                    self.morphs.targets.len() - 1
-                }
-            };
-            for (p, t) in objects.into_iter().enumerate() {
-                let prim = &mut self.doc["meshes"][self.mesh]["primitives"][p];
-                let list = array(prim, "targets");
-                if i < list.len() {
-                    list[i] = t;
-                } else {
-                    list.push(t);
-                }
-            }
-            at.push(i);
+            at.push(self.install_target(name, stored, objects));
         }
         self.store_names();
-        self.pad_weights(old, self.morphs.targets.len());
+        self.pad_weights(old, self.morphs.targets.len(), None);
         Ok(at)
     }
 
@@ -366,9 +323,68 @@ impl GltfAsset {
         }
     }
 
+    /// Fails when `count` targets named `names` cannot be added: a split rig, names and
+    /// targets of different counts, a name given twice, more targets than
+    /// [`GltfAsset::max_targets`].
+    pub(super) fn check_new_targets(&self, names: &[String], count: usize) -> Result<(), IoError> {
+        self.check_room(0)?;
+        if names.len() != count {
+            return Err(IoError::content(
+                &self.path,
+                format!("{} target names for {count} targets", names.len()),
+            ));
+        }
+        for (i, n) in names.iter().enumerate() {
+            if names[..i].contains(n) {
+                return Err(IoError::content(
+                    &self.path,
+                    format!("the target name '{n}' is given twice"),
+                ));
+            }
+        }
+        let fresh = names
+            .iter()
+            .filter(|n| !self.morphs.target_names.contains(n))
+            .count();
+        self.check_room(fresh)
+    }
+
+    /// Puts the target `name` (absolute positions `stored`, as a reader decodes them; one
+    /// target object per primitive in `objects`) in place of the target of that name, or after
+    /// the others; returns its index. The caller then stores the names and pads the weights
+    /// ([`GltfAsset::store_names`], [`GltfAsset::pad_weights`]).
+    pub(super) fn install_target(
+        &mut self,
+        name: &str,
+        stored: Vec<Point>,
+        objects: Vec<Value>,
+    ) -> usize {
+        let i = match self.morphs.target_names.iter().position(|n| n == name) {
+            Some(i) => {
+                self.morphs.targets[i] = stored;
+                i
+            }
+            None => {
+                self.morphs.target_names.push(name.to_string());
+                self.morphs.targets.push(stored);
+                self.morphs.targets.len() - 1
+            }
+        };
+        for (p, t) in objects.into_iter().enumerate() {
+            let prim = &mut self.doc["meshes"][self.mesh]["primitives"][p];
+            let list = array(prim, "targets");
+            if i < list.len() {
+                list[i] = t;
+            } else {
+                list.push(t);
+            }
+        }
+        i
+    }
+
     /// Writes the target names into `mesh.extras.targetNames` (when `extras` is an object or
     /// absent).
-    fn store_names(&mut self) {
+    pub(super) fn store_names(&mut self) {
         let mesh = &mut self.doc["meshes"][self.mesh];
         if mesh["extras"].is_null() {
             mesh["extras"] = json!({});
@@ -379,8 +395,9 @@ impl GltfAsset {
     }
 
     /// Pads `mesh.weights`, nodes' `weights`, the weight keys and every sampler driving the
-    /// mesh from `old` to `new` targets with zeros.
-    fn pad_weights(&mut self, old: usize, new: usize) {
+    /// mesh from `old` to `new` targets with zeros; the padded outputs are compressed with the
+    /// extension `meshopt` when given (see `asset_pack.rs`).
+    pub(super) fn pad_weights(&mut self, old: usize, new: usize, meshopt: Option<&str>) {
         if new == old {
             return;
         }
@@ -411,7 +428,10 @@ impl GltfAsset {
                 .iter()
                 .map(|&x| x as f32)
                 .collect();
-            let output = self.weights(&f);
+            let output = match meshopt {
+                Some(ext) => self.packed_weights(&f, new, ext),
+                None => self.weights(&f),
+            };
             let WeightSampler {
                 anim,
                 sampler,

@@ -83,6 +83,7 @@ mod anim;
 mod asset;
 mod asset_anim;
 mod asset_edit;
+mod asset_pack;
 mod asset_write;
 mod budget;
 mod buffers;
@@ -98,6 +99,7 @@ mod write_scene;
 mod write_vertices;
 
 pub use asset::{GltfAsset, GltfAssetOptions, GltfWeightAnimation};
+pub use asset_pack::CompactEncoding;
 pub use read::{
     parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs, read_gltf_morphs_with,
     GltfReadOptions,
