@@ -402,6 +402,28 @@ impl Outputs {
         })?)
     }
 
+    /// Stages a bake ([`morphkit::bake::write_usd`]: slider and combination blend shapes with
+    /// their in-betweens) with the run's names and custom layer data ([`frames_options`]).
+    pub fn usd_bake(
+        &mut self,
+        path: &Path,
+        base: &morphkit::TriMesh,
+        baked: &morphkit::bake::BakedRig,
+        sliders: &[String],
+        inputs: &[PathBuf],
+    ) -> anyhow::Result<()> {
+        let opts = frames_options(
+            &FramesOptions {
+                inputs: inputs.to_vec(),
+                ..FramesOptions::default()
+            },
+            0,
+        );
+        Ok(self.staging.write(path, false, |tmp| {
+            morphkit::bake::write_usd(tmp, base, baked, sliders, &opts.usd)
+        })?)
+    }
+
     /// Stages an animation (a frame directory, `.glb`/`.gltf`, `.pc2` or `.usda`), calling
     /// `on_frame(i)` after each OBJ frame; names, flags and extras as [`frames_options`].
     pub fn frames(

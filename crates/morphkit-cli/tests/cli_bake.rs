@@ -167,7 +167,92 @@ fn a_baked_asset_plays_the_bake_through_its_mapping() {
     let e = fails(&["bake", "--rig", s(&out), "--out", s(&d.join("again.glb"))]);
     assert!(e.contains("already baked") && !e.contains("baking"), "{e}");
     let e = fails(&["bake", "--rig", s(&input), "--out", s(&d.join("x.obj"))]);
-    assert!(e.contains(".glb or .gltf"), "{e}");
+    assert!(e.contains(".glb, .gltf") && e.contains(".usda"), "{e}");
     assert!(!d.join("again.glb").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn a_usd_bake_plays_the_bake_through_usdskel() {
+    let d = tmp_dir("bake-usd");
+    let input = d.join("in.glb");
+    fixture::write(&input, &fixture::standard(false, 100.0));
+    let out = d.join("baked.usda");
+    ok(&[
+        "bake",
+        "--rig",
+        s(&input),
+        "--inbetweens",
+        "3",
+        "--out",
+        s(&out),
+    ]);
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        text.contains("skel:blendShapes = [\"bend\", \"lift\", \"bend+lift\"]"),
+        "{text}"
+    );
+    assert!(text.contains("inbetweens:w0_25") && text.contains("weight = 0.25"));
+    let Some(check) = std::env::var_os("MORPHKIT_USD_CHECK") else {
+        eprintln!("MORPHKIT_USD_CHECK is unset; skipping the usd-core checks");
+        return;
+    };
+    let r = std::process::Command::new("python3")
+        .arg(&check)
+        .args(["--blendshapes", "bend,lift,bend+lift"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let t = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success() && t.contains(": 0 errors"), "{t}");
+    // UsdSkel's own evaluation (in-betweens interpolated by Pixar's code) against the
+    // library's bake: sliders at their weights, the combination at φ / 4.
+    let im = GltfAsset::read(&input, &body()).unwrap().morphs().clone();
+    let named = std::iter::once(("base".to_string(), im.base.positions.clone()))
+        .chain(im.target_names.iter().cloned().zip(im.targets.clone()))
+        .collect();
+    let shapes = ShapeSet::new(im.base.clone(), named).unwrap();
+    let weld = Weld::of_shapes(&shapes, WELD_TOLERANCE);
+    let welded = weld.shapes(&shapes).unwrap();
+    let mut solver = PhysicalBlend::new(&welded, &BlendOptions::default()).unwrap();
+    let opts = morphkit::bake::BakeOptions {
+        inbetweens: 3,
+        ..Default::default()
+    };
+    let baked = morphkit::bake::bake(&mut solver, &opts, 1)
+        .unwrap()
+        .unweld(&weld, &welded);
+    let c = &baked.combinations[0];
+    let cases: Vec<Value> = [[0.3, 0.0], [0.0, 0.8], [0.5, 0.5], [0.8, 0.3], [1.0, 1.0]]
+        .iter()
+        .map(|x| {
+            serde_json::json!({
+                "weights": {"bend": x[0], "lift": x[1], "bend+lift": baked.combination_weight(c, x) / 4.0},
+                "points": baked.evaluate(x),
+            })
+        })
+        .collect();
+    let json = d.join("cases.json");
+    std::fs::write(&json, serde_json::to_string(&cases).unwrap()).unwrap();
+    let eval = std::path::Path::new(&check).with_file_name("bake_eval.py");
+    let r = std::process::Command::new("python3")
+        .arg(eval)
+        .arg(&out)
+        .arg(&json)
+        .output()
+        .unwrap();
+    let t = String::from_utf8_lossy(&r.stdout);
+    assert!(
+        r.status.success(),
+        "{t}{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    let worst: f64 = t
+        .lines()
+        .find_map(|l| l.strip_prefix("max "))
+        .and_then(|x| x.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no result: {t}"));
+    // f32 storage of points and offsets.
+    assert!(worst <= 1e-6, "{t}");
     let _ = std::fs::remove_dir_all(&d);
 }

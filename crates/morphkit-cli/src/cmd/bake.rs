@@ -19,6 +19,7 @@ const EXAMPLES: &str = "\
 Examples:
   morphkit bake --rig face.glb --out face-baked.glb
   morphkit bake --rig face.glb --mesh Head --inbetweens 3 --report bake.json --out baked.glb
+  morphkit bake --rig face.glb --out face-baked.usda
 
 The output plays in any glTF viewer as the linear blend of the sliders' targets; the physical
 look needs the sliders mapped to the baked targets' weights (mesh.extras.morphkitBake; about
@@ -34,7 +35,8 @@ pub struct BakeArgs {
     /// The mesh, by name or index, when several have morph targets.
     #[arg(long)]
     pub mesh: Option<String>,
-    /// The baked asset (.glb or .gltf).
+    /// The baked asset (.glb or .gltf: the asset with the shapes added and the slider mapping
+    /// in its extras) or a .usda (UsdSkel blend shapes with in-betweens).
     #[arg(long)]
     pub out: PathBuf,
     /// In-between shapes per target, at k / (N + 1) (default 7: the eighths).
@@ -57,12 +59,15 @@ pub struct BakeArgs {
 /// Runs `morphkit bake`.
 pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
     let start = Instant::now();
-    if !matches!(Format::from_path(&a.out), Some(Format::Glb | Format::Gltf)) {
-        bail!(
-            "{}: the baked rig is written as .glb or .gltf",
+    let usd = match Format::from_path(&a.out) {
+        Some(Format::Glb | Format::Gltf) => false,
+        Some(Format::Usda) => true,
+        _ => bail!(
+            "{}: the baked rig is written as .glb, .gltf (the asset with the shapes and the \
+             slider mapping) or .usda (UsdSkel blend shapes with in-betweens)",
             a.out.display()
-        );
-    }
+        ),
+    };
     let defaults = BakeOptions::default();
     let options = BakeOptions {
         inbetweens: a.inbetweens.unwrap_or(defaults.inbetweens),
@@ -115,9 +120,14 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
     let t_bake = Instant::now();
     let baked = bake(&mut solver, &options, threads)?.unweld(&weld, &welded);
     let bake_seconds = t_bake.elapsed().as_secs_f64();
-    morphkit::bake::add_to_gltf(&mut asset, &baked)?;
-    outputs.gltf_asset(&a.out, &asset, &inputs, 0)?;
-    let added = asset.morphs().targets.len() - n;
+    let added = if usd {
+        outputs.usd_bake(&a.out, shapes.base(), &baked, &m.target_names, &inputs)?;
+        baked.num_shapes() - n
+    } else {
+        morphkit::bake::add_to_gltf(&mut asset, &baked)?;
+        outputs.gltf_asset(&a.out, &asset, &inputs, 0)?;
+        asset.morphs().targets.len() - n
+    };
     if let Some(r) = &a.report {
         let report = json!({
             "command": "bake",
@@ -129,7 +139,7 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
             "inbetweens_per_target": options.inbetweens,
             "combinations": baked.combinations.iter().map(|c| [c.targets.0, c.targets.1]).collect::<Vec<_>>(),
             "targets_added": added,
-            "targets_total": asset.morphs().targets.len(),
+            "shapes_total": n + added,
             "solves": n * options.inbetweens + n * (n - 1) / 2 * options.pair_samples.len(),
             "threads": threads,
             "timings": { "bake_seconds": bake_seconds, "total_seconds": start.elapsed().as_secs_f64() },
@@ -138,7 +148,7 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
     }
     outputs.commit()?;
     eprintln!(
-        "baked {n} targets into {} in-betweens and {} combination shapes ({added} targets added) in {}",
+        "baked {n} targets into {} in-betweens and {} combination shapes ({added} shapes added) in {}",
         n * options.inbetweens,
         added - n * options.inbetweens,
         a.out.display()

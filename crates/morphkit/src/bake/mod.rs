@@ -37,8 +37,10 @@ use crate::ShapeSet;
 mod gltf;
 #[cfg(test)]
 mod tests;
+mod usd;
 
 pub use gltf::{add_to_gltf, check_gltf};
+pub use usd::write_usd;
 
 /// How to bake.
 #[derive(Clone, Debug, PartialEq)]

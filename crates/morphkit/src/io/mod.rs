@@ -59,8 +59,8 @@ pub use source::{strip_bom, strip_bom_str};
 pub use staging::{frame_files, is_frame_file_name, Staging};
 pub use temporaries::{remove_stale_for, remove_temporaries_then};
 pub use usd::{
-    read_usd_animation, write_usd_animation, write_usd_blendshapes, UpAxis, UsdAnimation,
-    UsdOptions,
+    read_usd_animation, write_usd_animation, write_usd_blendshape_rig, write_usd_blendshapes,
+    UpAxis, UsdAnimation, UsdBlendShape, UsdOptions,
 };
 pub use weights::{
     parse_named_weights, parse_weights, read_named_weights, read_weights, WeightRow,

@@ -35,7 +35,9 @@ mod text;
 mod write;
 
 pub use read::{parse_usd_animation, read_usd_animation, UsdAnimation};
-pub use write::{write_usd_animation, write_usd_blendshapes};
+pub use write::{
+    write_usd_animation, write_usd_blendshape_rig, write_usd_blendshapes, UsdBlendShape,
+};
 
 /// The stage's up axis (`upAxis` layer metadata).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]

@@ -161,8 +161,8 @@ pub fn write_usd_animation(
     write_atomic(path, out.as_bytes())
 }
 
-/// Writes a blendshape rig as `UsdSkel` (layout in the [module documentation](super)): `base`
-/// and one `BlendShape` per entry of `shapes` (absolute positions over `base`'s connectivity)
+/// Writes a `UsdSkel` rig to `path`: the base mesh bound to one `BlendShape` per shape (`#V`
+/// absolute positions in `shapes`, stored as offsets of the points that move, as `f32`),
 /// named by `names`, all weights 0, atomically. Prim names are the names made valid USD
 /// identifiers (made unique with a suffix); `skel:blendShapes` keeps the names as given.
 ///
@@ -181,6 +181,57 @@ pub fn write_usd_blendshapes(
             format!("{} names for {} blend shapes", names.len(), shapes.len()),
         ));
     }
+    let nv = base.num_vertices();
+    for (s, p) in shapes.iter().enumerate() {
+        check_points(path, &format!("blend shape {s} ('{}')", names[s]), p, nv)?;
+    }
+    let deltas: Vec<Vec<Point>> = shapes
+        .iter()
+        .map(|p| {
+            p.iter()
+                .zip(&base.positions)
+                .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+                .collect()
+        })
+        .collect();
+    let shapes: Vec<UsdBlendShape> = names
+        .iter()
+        .zip(&deltas)
+        .map(|(name, offsets)| UsdBlendShape {
+            name,
+            offsets,
+            inbetweens: Vec::new(),
+        })
+        .collect();
+    write_usd_blendshape_rig(path, base, &shapes, opts)
+}
+
+/// One `UsdSkel` blend shape: its `#V` displacements at weight 1, and its in-between shapes
+/// (`UsdSkelInbetweenShape`: `#V` displacements at weights strictly between 0 and 1, which
+/// UsdSkel interpolates piecewise linearly with the shape itself at 1).
+#[derive(Clone, Debug)]
+pub struct UsdBlendShape<'a> {
+    /// Its name in `skel:blendShapes`.
+    pub name: &'a str,
+    /// `#V` displacements at weight 1.
+    pub offsets: &'a [Point],
+    /// `(weight, #V displacements)`, weights increasing in `(0, 1)`.
+    pub inbetweens: Vec<(f64, &'a [Point])>,
+}
+
+/// [`write_usd_blendshapes`] for shapes given as displacements with in-betweens: each
+/// `BlendShape` stores the points that move in its shape or any of its in-betweens
+/// (`pointIndices`), and every in-between as `inbetweens:wN` with its `weight`.
+///
+/// Errors: those of [`write_usd_blendshapes`], and in-between weights not increasing in
+/// `(0, 1)`.
+pub fn write_usd_blendshape_rig(
+    path: &Path,
+    base: &TriMesh,
+    shapes: &[UsdBlendShape],
+    opts: &UsdOptions,
+) -> Result<(), IoError> {
+    let names: Vec<String> = shapes.iter().map(|s| s.name.to_string()).collect();
     for (i, n) in names.iter().enumerate() {
         if names[..i].contains(n) {
             return Err(IoError::content(
@@ -191,11 +242,23 @@ pub fn write_usd_blendshapes(
     }
     let nv = base.num_vertices();
     check_points(path, "the base", &base.positions, nv)?;
-    for (s, p) in shapes.iter().enumerate() {
-        check_points(path, &format!("blend shape {s} ('{}')", names[s]), p, nv)?;
+    for (s, shape) in shapes.iter().enumerate() {
+        let what = format!("blend shape {s} ('{}')", names[s]);
+        check_points(path, &what, shape.offsets, nv)?;
+        let mut last = 0.0;
+        for (w, d) in &shape.inbetweens {
+            if !(*w > last && *w < 1.0) {
+                return Err(IoError::content(
+                    path,
+                    format!("{what}: in-between weights must increase within (0, 1), not {w}"),
+                ));
+            }
+            last = *w;
+            check_points(path, &format!("{what}, in-between at {w}"), d, nv)?;
+        }
     }
     let mut prims: Vec<String> = Vec::with_capacity(names.len());
-    for n in names {
+    for n in &names {
         let id = identifier(n);
         let mut unique = id.clone();
         let mut k = 1;
@@ -245,22 +308,30 @@ pub fn write_usd_blendshapes(
     }
     let _ = writeln!(out, "]\n{ind}rel skel:skeleton = </{root}/skel>");
     let _ = writeln!(out, "{ind}uniform token subdivisionScheme = \"none\"");
-    for (s, p) in shapes.iter().enumerate() {
+    for (s, shape) in shapes.iter().enumerate() {
+        let b = &base.positions;
+        let moves = |d: &[Point], v: usize| {
+            (0..3).any(|k| ((b[v][k] + d[v][k]) as f32) != (b[v][k] as f32))
+        };
         let moved: Vec<usize> = (0..nv)
-            .filter(|&v| (0..3).any(|k| (p[v][k] as f32) != (base.positions[v][k] as f32)))
-            .collect();
-        let offsets: Vec<Point> = moved
-            .iter()
-            .map(|&v| {
-                let (a, b) = (p[v], base.positions[v]);
-                [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+            .filter(|&v| {
+                moves(shape.offsets, v) || shape.inbetweens.iter().any(|(_, d)| moves(d, v))
             })
             .collect();
+        let at = |d: &[Point]| -> Vec<Point> { moved.iter().map(|&v| d[v]).collect() };
         let _ = writeln!(out, "\n{ind}def BlendShape {}\n{ind}{{", quoted(&prims[s]));
         let _ = write!(out, "{ind}    uniform vector3f[] offsets = ");
-        vec3_array(&mut out, &offsets);
+        vec3_array(&mut out, &at(shape.offsets));
         let _ = write!(out, "\n{ind}    uniform int[] pointIndices = ");
         int_array(&mut out, moved.iter().map(|&v| v as u32));
+        for (w, d) in &shape.inbetweens {
+            let name = format!("w{}", format!("{w}").replace(['.', '-'], "_"));
+            let _ = write!(out, "\n{ind}    uniform vector3f[] inbetweens:{name} = ");
+            vec3_array(&mut out, &at(d));
+            let _ = write!(out, " (\n{ind}        weight = ");
+            f32_text(&mut out, *w);
+            let _ = write!(out, "\n{ind}    )");
+        }
         let _ = writeln!(out, "\n{ind}}}");
     }
     out.push_str("    }\n\n");
