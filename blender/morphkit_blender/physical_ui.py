@@ -244,7 +244,8 @@ class MORPHKIT_PT_physical(bpy.types.Panel):
             if baked is not None:  # the sliders of a baked rig are its properties
                 col.label(text="Baked sliders (drivers):")
                 for name, prop in zip(baked["sliders"], baked["properties"]):
-                    col.prop(obj, f'["{bpy.utils.escape_identifier(prop)}"]', text=name, slider=True)
+                    path = f'["{bpy.utils.escape_identifier(prop)}"]'
+                    col.prop(obj, path, text=name, slider=True)
             else:
                 for k in target_keys(obj):
                     col.prop(k, "value", text=k.name, slider=True)
