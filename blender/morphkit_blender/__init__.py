@@ -107,9 +107,9 @@ def register():
     if not _find_module():
         print("morphkit: the morphkit Python module was not found; set its folder in the "
               "add-on preferences or MORPHKIT_PYTHONPATH")
-    from . import physical_ui, synth_ops, transfer_ops
+    from . import bake_ops, physical_ui, synth_ops, transfer_ops
 
-    _modules[:] = [physical_ui, transfer_ops, synth_ops]
+    _modules[:] = [physical_ui, bake_ops, transfer_ops, synth_ops]
     for m in _modules:
         m.register()
 

@@ -31,6 +31,7 @@ import numpy as np
 from . import geometry
 
 RESULT_KEY = "morphkit_physical"
+BAKE_PROP = "morphkit_bake"  # a baked rig's record: sliders, their properties, the added keys
 _solvers = {}  # object name -> (signature, PhysicalBlend, F, Predictor)
 _last = {}  # object name -> weights and pulls last solved or asked for
 _busy = [False]
@@ -48,8 +49,11 @@ def morphkit_module():
 
 
 def target_keys(obj):
+    """The rig's targets (its sliders): every shape key but the base, the result key and the
+    keys a bake added (bake_ops)."""
     keys = obj.data.shape_keys.key_blocks
-    return [k for k in keys[1:] if k.name != RESULT_KEY]
+    baked = set(obj[BAKE_PROP].get("shapes", ())) if BAKE_PROP in obj else ()
+    return [k for k in keys[1:] if k.name != RESULT_KEY and k.name not in baked]
 
 
 def obstacles_of(scene, obj):
@@ -144,7 +148,15 @@ def pulls_of(obj, scene):
 
 
 def weights_of(obj):
+    """The sliders' weights: the targets' values, or a baked rig's slider properties."""
+    if BAKE_PROP in obj:
+        return [float(obj.get(p, 0.0)) for p in obj[BAKE_PROP]["properties"]]
     return [k.value for k in target_keys(obj)]
+
+
+def _shown_keys(obj):
+    """The keys that the result key replaces: the targets and a bake's added keys."""
+    return [k for k in obj.data.shape_keys.key_blocks[1:] if k.name != RESULT_KEY]
 
 
 def _solve(blend, w, pulls):
@@ -163,7 +175,7 @@ def _show(obj, X, what):
     geometry.set_key_coords(key, X)
     key.value = 1.0
     key.mute = False
-    for k in target_keys(obj):
+    for k in _shown_keys(obj):
         k.mute = True
     obj.data.update()
     obj["morphkit_showing"] = what
@@ -333,7 +345,7 @@ def finish_live(timeout=300.0):
 def show_linear(obj):
     if obj.data.shape_keys is None:
         return
-    for k in target_keys(obj):
+    for k in _shown_keys(obj):
         k.mute = False
     key = obj.data.shape_keys.key_blocks.get(RESULT_KEY)
     if key is not None:

@@ -5,6 +5,7 @@ import bpy
 
 from . import geometry, jumps
 from .physical import (
+    BAKE_PROP,
     _jobs,
     _last,
     _live_changed,
@@ -239,13 +240,21 @@ class MORPHKIT_PT_physical(bpy.types.Panel):
         row.prop(obj, "morphkit_anchor")
         if obj.data.shape_keys is not None:
             col = layout.column(align=True)
-            for k in target_keys(obj):
-                col.prop(k, "value", text=k.name, slider=True)
+            baked = obj.get(BAKE_PROP)
+            if baked is not None:  # the sliders of a baked rig are its properties
+                col.label(text="Baked sliders (drivers):")
+                for name, prop in zip(baked["sliders"], baked["properties"]):
+                    path = f'["{bpy.utils.escape_identifier(prop)}"]'
+                    col.prop(obj, path, text=name, slider=True)
+            else:
+                for k in target_keys(obj):
+                    col.prop(k, "value", text=k.name, slider=True)
         row = layout.row(align=True)
         row.operator(MORPHKIT_OT_physical_update.bl_idname, text="Physical")
         row.operator(MORPHKIT_OT_physical_linear.bl_idname, text="Linear")
         layout.operator(MORPHKIT_OT_physical_bake.bl_idname)
         layout.operator(MORPHKIT_OT_export_scene.bl_idname)
+        layout.operator("morphkit.bake_correctives")
         if obj.name in _jobs:
             layout.label(text=f"solving… (showing the {obj.get('morphkit_showing', 'preview')})")
         if obj.get("morphkit_showing") == "interactive" and "morphkit_error_estimate" in obj:

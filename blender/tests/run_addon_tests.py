@@ -475,5 +475,119 @@ results["pose_error"] = err
 arm.data.shape_keys.key_blocks["morphkit_pose"].value = 1.0
 render("pose", arm)
 
+# --- Baked physical correctives (issue 56): shape keys with drivers, played without the add-on
+import inspect  # noqa: E402
+
+from morphkit_blender import bake_ops  # noqa: E402
+
+
+def bulge(V, at=3.0, width=0.8, amount=0.35):
+    out = V.copy()
+    f = 1.0 + amount * np.clip(1.0 - np.abs(V[:, 0] - at) / width, 0.0, None)
+    out[:, 1:] *= f[:, None]
+    return out
+
+
+BV, BF = tube(rings=16, around=8)
+SLIDERS = ["bendA", "bendB", "bulge"]
+rig_obj = new_object("baked", BV, BF, list(zip(SLIDERS, [
+    joint(BV, 0.9, at=2.0), joint(BV, -0.9, at=4.0), bulge(BV)])))
+rkeys = rig_obj.data.shape_keys.key_blocks
+rkeys["bendA"].value = 0.25
+op_props = bpy.ops.morphkit.bake_correctives.get_rna_type().properties
+for name, p in inspect.signature(morphkit.PhysicalBlend.bake).parameters.items():
+    if name in ("inbetweens", "pair_tolerance", "max_pairs", "damping"):
+        check(abs(op_props[name].default - p.default) <= 1e-6 * abs(p.default),
+              f"the operator's {name} default is not the module's")
+Bb = geometry.key_coords(rkeys[0])
+Fb, _ = geometry.triangles(rig_obj.data)
+SETTINGS = [(0.3, 0.0, 0.0), (0.0, 0.55, 0.0), (0.0, 0.0, 0.93), (0.7, 0.9, 0.0),
+            (0.4, 0.8, 1.0), (1.3, 0.0, 0.0), (0.6, 1.2, 0.2), (-0.2, 0.5, 0.0)]
+
+
+def bake_and_check(**options):
+    """Bakes `rig_obj` with the operator, checks its keys and drivers against the module's
+    bake; returns (BakedRig, the keys in shape_weights' order)."""
+    activate(rig_obj)
+    check(bpy.ops.morphkit.bake_correctives(threads=2, **options) == {"FINISHED"}, "bake failed")
+    blend = morphkit.PhysicalBlend(Bb, [geometry.key_coords(rkeys[s]) for s in SLIDERS], Fb)
+    rig = blend.bake(threads=2, **options)
+    added = rig.num_shapes - len(SLIDERS)
+    check(len(rig.combinations) >= 1, "the test rig has no combination shape")
+    check(len(rkeys) == 1 + len(SLIDERS) + added, f"{len(rkeys)} keys for {rig.num_shapes} shapes")
+    check(len(rig_obj["morphkit_bake"]["shapes"]) == added, "the bake's record of its keys")
+    order, shapes = [], []
+    for t, (s, ws) in enumerate(zip(SLIDERS, rig.inbetween_weights)):
+        for k, w in enumerate(ws):
+            order.append(s if k == len(ws) - 1 else f"{s}@{bake_ops.short(w)}")
+            shapes.append(rig.inbetween(t, k))
+    for c, ((i, j), levels) in enumerate(zip(rig.combinations, rig.combination_levels)):
+        for level, w in enumerate(levels):
+            order.append(f"{SLIDERS[i]}+{SLIDERS[j]}@{bake_ops.short(w)}")
+            shapes.append(rig.combination(c, level))
+    check(all(n in rkeys for n in order), f"keys {list(rkeys.keys())}, expected {order}")
+    err = max(float(np.abs(geometry.key_coords(rkeys[n]) - Bb - d).max()) for n, d in zip(order, shapes))
+    check(err / diag(BV) < 1e-6, f"baked keys differ from the module's shapes by {err}")
+    drivers = {fc.data_path: fc.driver for fc in rig_obj.data.shape_keys.animation_data.drivers}
+    for n in order:
+        d = drivers.get(f'key_blocks["{n}"].value')
+        check(d is not None and d.is_valid and d.is_simple_expression, f"{n}'s driver is not simple")
+        check(rkeys[n].slider_min == -10.0 and rkeys[n].slider_max == 10.0, f"{n}'s slider range")
+    return rig, order
+
+
+def play_baked(obj, rig, order, what):
+    """Sets the sliders' properties, and checks the keys' values and the evaluated mesh."""
+    worst = 0.0
+    for x in SETTINGS:
+        for s, v in zip(SLIDERS, x):
+            obj[f"mk_{s}"] = v
+        obj.update_tag()  # as the UI does for a property edited there (a script's own job)
+        bpy.context.view_layer.update()
+        x32 = [float(np.float32(v)) for v in x]  # what the drivers read
+        want = rig.shape_weights(x32)
+        keys = obj.data.shape_keys.key_blocks
+        got = [keys[n].value for n in order]
+        check(np.allclose(got, want, rtol=0, atol=1e-5), f"{what}: key values at {x}: {got} {want}")
+        ev = geometry.evaluated_vertices(obj, bpy.context.evaluated_depsgraph_get())
+        err = float(np.abs(ev - rig.evaluate(x32)).max()) / diag(BV)
+        check(err < 1e-6, f"{what}: the baked rig at {x} is {err} off BakedRig.evaluate")
+        worst = max(worst, err)
+    return worst
+
+
+# A bake with damping and 3 in-betweens, then baked again (replaced) with the defaults.
+rig, order = bake_and_check(damping=2.0, inbetweens=3)
+check(abs(rig_obj["mk_bendA"] - 0.25) < 1e-7, "the slider's property starts at the key's value")
+results["bake_damped_error"] = play_baked(rig_obj, rig, order, "damped")
+rig, order = bake_and_check()
+check("bendA@0.125" in rkeys and "bendA@0.25" in rkeys, "the default in-betweens' keys")
+results["bake_shapes_added"] = rig.num_shapes - len(SLIDERS)
+results["bake_error"] = play_baked(rig_obj, rig, order, "with the add-on")
+# The physical tools read a baked rig's sliders from its properties and hide its added keys.
+activate(rig_obj)
+check(bpy.ops.morphkit.physical_update() == {"FINISHED"}, "physical_update on the baked rig")
+solved = geometry.key_coords(rkeys[physical.RESULT_KEY])
+x = [float(np.float32(v)) for v in SETTINGS[-1]]
+ref = morphkit.PhysicalBlend(Bb, [geometry.key_coords(rkeys[s]) for s in SLIDERS], Fb).solve(x)
+check(float(np.abs(solved - ref).max()) / diag(BV) < 1e-6, "the baked rig's physical solve")
+check(all(rkeys[n].mute for n in order), "the baked keys are shown under the solve")
+check(bpy.ops.morphkit.physical_linear() == {"FINISHED"}, "physical_linear on the baked rig")
+check(not any(rkeys[n].mute for n in order), "the baked keys are muted after Linear")
+# Without the add-on and with Python drivers off (--factory-startup has auto-run off too):
+# the saved file opened without trusting it; a driver that needs Python stays blocked.
+probe = bpy.data.objects.new("autoexec_probe", None)
+bpy.context.scene.collection.objects.link(probe)
+probe["v"] = 0.0
+probe.driver_add('["v"]').driver.expression = "bpy.context.scene.frame_current ** 2 + 1"
+baked_file = OUT / "baked.blend"
+bpy.ops.wm.save_as_mainfile(filepath=str(baked_file))
+bpy.ops.preferences.addon_disable(module="morphkit_blender")
+bpy.ops.wm.open_mainfile(filepath=str(baked_file), use_scripts=False)
+bpy.context.scene.frame_set(3)
+check(bpy.data.objects["autoexec_probe"]["v"] != 10.0 and bpy.app.autoexec_fail,
+      "Python drivers ran: the check without auto-run proves nothing")
+results["bake_error_no_addon"] = play_baked(bpy.data.objects["baked"], rig, order, "no add-on")
+
 (OUT / "results.json").write_text(json.dumps(results, indent=2))
 print("MORPHKIT ADDON TESTS PASSED", json.dumps(results))

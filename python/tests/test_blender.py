@@ -111,6 +111,9 @@ def test_addon_headless(tmp_path, data):
     results = json.loads((out / "results.json").read_text())
     assert "vendor" in results["module"]
     assert results["physical_key_error"] < 1e-6 and results["transfer_error"] < 1e-6
+    # Issue 56: the baked rig's drivers play BakedRig.evaluate, also without the add-on.
+    assert results["bake_shapes_added"] > 0
+    assert max(results["bake_error"], results["bake_error_no_addon"]) < 1e-6
     if os.environ.get("MORPHKIT_BIN"):  # the exported scene.toml was replayed by the CLI
         assert results["scene_replay_error"] < 1e-5
     for png in ("physical", "obstacle", "transfer", "flexibility", "partitions", "pose"):
