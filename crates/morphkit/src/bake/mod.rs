@@ -307,7 +307,8 @@ pub fn bake(
             .pair_samples
             .iter()
             .any(|&s| !(s > 0.0 && s.is_finite()))
-        || !(options.pair_tolerance >= 0.0)
+        || options.pair_tolerance.is_nan()
+        || options.pair_tolerance < 0.0
         || !(options.damping >= 0.0 && options.damping.is_finite())
     {
         return Err(BakeError::Options(format!(
