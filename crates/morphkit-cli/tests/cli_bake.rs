@@ -74,6 +74,38 @@ fn target_weights(map: &Value, x: &[f64], n_targets: usize) -> Vec<f64> {
     z
 }
 
+/// The bake of `input`'s rig made by the library (3 in-betweens), with what made it.
+struct Library {
+    shapes: ShapeSet,
+    weld: Weld,
+    solver: PhysicalBlend,
+    baked: morphkit::bake::BakedRig,
+}
+
+fn library_bake(input: &std::path::Path) -> Library {
+    let im = GltfAsset::read(input, &body()).unwrap().morphs().clone();
+    let named = std::iter::once(("base".to_string(), im.base.positions.clone()))
+        .chain(im.target_names.iter().cloned().zip(im.targets.clone()))
+        .collect();
+    let shapes = ShapeSet::new(im.base.clone(), named).unwrap();
+    let weld = Weld::of_shapes(&shapes, WELD_TOLERANCE);
+    let welded = weld.shapes(&shapes).unwrap();
+    let mut solver = PhysicalBlend::new(&welded, &BlendOptions::default()).unwrap();
+    let opts = morphkit::bake::BakeOptions {
+        inbetweens: 3,
+        ..Default::default()
+    };
+    let baked = morphkit::bake::bake(&mut solver, &opts, 1)
+        .unwrap()
+        .unweld(&weld, &welded);
+    Library {
+        shapes,
+        weld,
+        solver,
+        baked,
+    }
+}
+
 #[test]
 fn a_baked_asset_plays_the_bake_through_its_mapping() {
     let d = tmp_dir("bake");
@@ -121,22 +153,12 @@ fn a_baked_asset_plays_the_bake_through_its_mapping() {
     let map = &mesh["extras"]["morphkitBake"];
     assert_eq!(map["sliders"], serde_json::json!(["bend", "lift"]));
     // The same bake in the library, on the input.
-    let input_asset = GltfAsset::read(&input, &body()).unwrap();
-    let im = input_asset.morphs();
-    let named = std::iter::once(("base".to_string(), im.base.positions.clone()))
-        .chain(im.target_names.iter().cloned().zip(im.targets.clone()))
-        .collect();
-    let shapes = ShapeSet::new(im.base.clone(), named).unwrap();
-    let weld = Weld::of_shapes(&shapes, WELD_TOLERANCE);
-    let welded = weld.shapes(&shapes).unwrap();
-    let mut solver = PhysicalBlend::new(&welded, &BlendOptions::default()).unwrap();
-    let opts = morphkit::bake::BakeOptions {
-        inbetweens: 3,
-        ..Default::default()
-    };
-    let baked = morphkit::bake::bake(&mut solver, &opts, 1)
-        .unwrap()
-        .unweld(&weld, &welded);
+    let Library {
+        shapes,
+        weld,
+        mut solver,
+        baked,
+    } = library_bake(&input);
     let diag = shapes.base().bbox_diagonal();
     for x in [
         [0.25, 0.0],
@@ -207,21 +229,7 @@ fn a_usd_bake_plays_the_bake_through_usdskel() {
     assert!(r.status.success() && t.contains(": 0 errors"), "{t}");
     // UsdSkel's own evaluation (in-betweens interpolated by Pixar's code) against the
     // library's bake: sliders at their weights, the combination at φ / 4.
-    let im = GltfAsset::read(&input, &body()).unwrap().morphs().clone();
-    let named = std::iter::once(("base".to_string(), im.base.positions.clone()))
-        .chain(im.target_names.iter().cloned().zip(im.targets.clone()))
-        .collect();
-    let shapes = ShapeSet::new(im.base.clone(), named).unwrap();
-    let weld = Weld::of_shapes(&shapes, WELD_TOLERANCE);
-    let welded = weld.shapes(&shapes).unwrap();
-    let mut solver = PhysicalBlend::new(&welded, &BlendOptions::default()).unwrap();
-    let opts = morphkit::bake::BakeOptions {
-        inbetweens: 3,
-        ..Default::default()
-    };
-    let baked = morphkit::bake::bake(&mut solver, &opts, 1)
-        .unwrap()
-        .unweld(&weld, &welded);
+    let baked = library_bake(&input).baked;
     let c = &baked.combinations[0];
     let cases: Vec<Value> = [[0.3, 0.0], [0.0, 0.8], [0.5, 0.5], [0.8, 0.3], [1.0, 1.0]]
         .iter()
