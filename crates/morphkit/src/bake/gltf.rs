@@ -67,10 +67,20 @@ pub fn add_to_gltf(asset: &mut GltfAsset, baked: &BakedRig) -> Result<(), IoErro
         ));
     }
     let base = asset.morphs().base.positions.clone();
+    // Displacements under 1e-8 of the diagonal (a solve's far field, where the shape does not
+    // act) are stored as 0, so that local shapes are stored sparsely: a few 1e-8 of the
+    // diagonal at most in any evaluation.
+    let floor = 1e-8 * asset.morphs().base.bbox_diagonal();
     let absolute = |d: &[Point]| -> Vec<Point> {
         base.iter()
             .zip(d)
-            .map(|(b, p)| [b[0] + p[0], b[1] + p[1], b[2] + p[2]])
+            .map(|(b, p)| {
+                if (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() < floor {
+                    *b
+                } else {
+                    [b[0] + p[0], b[1] + p[1], b[2] + p[2]]
+                }
+            })
             .collect()
     };
     let (mut names, mut shapes) = (Vec::new(), Vec::new());
@@ -97,7 +107,11 @@ pub fn add_to_gltf(asset: &mut GltfAsset, baked: &BakedRig) -> Result<(), IoErro
                 ));
         }
     }
-    asset.add_targets(&names, &shapes)?;
+    // Most in-betweens and combinations move a part of the mesh: sparse where smaller.
+    asset.set_sparse_targets(true);
+    let added = asset.add_targets(&names, &shapes);
+    asset.set_sparse_targets(false);
+    added?;
     let index = |n: &String| {
         asset
             .morphs()

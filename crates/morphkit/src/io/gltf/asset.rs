@@ -96,6 +96,8 @@ pub struct GltfAsset {
     pub(super) animations: Vec<GltfWeightAnimation>,
     pub(super) split: bool,
     pub(super) max_targets: usize,
+    /// Store new targets' deltas sparsely where that is smaller ([`GltfAsset::set_sparse_targets`]).
+    pub(super) sparse_targets: bool,
 }
 
 /// What the read finds beyond [`Loaded`].
@@ -327,6 +329,7 @@ impl GltfAsset {
             animations: found.animations,
             split,
             max_targets: SAFE_MORPH_TARGETS,
+            sparse_targets: false,
         })
     }
 
@@ -529,6 +532,13 @@ impl GltfAsset {
     /// Sets [`GltfAsset::max_targets`].
     pub fn set_max_targets(&mut self, max: usize) {
         self.max_targets = max;
+    }
+
+    /// Targets added from now on store their position and normal deltas as sparse accessors
+    /// (glTF 2.0 §3.6.2.3: the moved vertices' indices and values, zeros elsewhere) where that
+    /// is smaller than dense (fewer than three quarters of the vertices move): for edits that add many local shapes (a bake). Off by default.
+    pub fn set_sparse_targets(&mut self, on: bool) {
+        self.sparse_targets = on;
     }
 
     /// Fails, before any work, when `new` more morph targets would take the chosen mesh over

@@ -235,3 +235,50 @@ fn quantized_compressed_correctives_play_the_stored_numbers() {
     assert!(sizes[1] < sizes[0] && sizes[2] < sizes[1], "{sizes:?}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn sparse_targets_store_only_the_moved_vertices_and_read_back_the_same() {
+    let d = tmp("sparse");
+    let p = d.join("a.glb");
+    fixture::write(&p, &fixture::standard(false, 1.0));
+    let mut a = GltfAsset::read(&p, &GltfReadOptions::default()).unwrap();
+    let base = a.morphs().base.positions.clone();
+    // Ten of the 120 vertices move.
+    let local: Vec<Point> = base
+        .iter()
+        .enumerate()
+        .map(|(i, q)| if i < 10 { [q[0] + 0.1, q[1], q[2]] } else { *q })
+        .collect();
+    a.set_sparse_targets(true);
+    a.add_targets(&["local".to_string()], std::slice::from_ref(&local))
+        .unwrap();
+    a.set_sparse_targets(false);
+    let out = d.join("b.glb");
+    a.write(&out, &GltfAssetOptions::default()).unwrap();
+    fixture::assert_valid(&[&out]);
+    let b = GltfAsset::read(&out, &GltfReadOptions::default()).unwrap();
+    let k = b
+        .morphs()
+        .target_names
+        .iter()
+        .position(|n| n == "local")
+        .unwrap();
+    assert!(max_distance(&b.morphs().targets[k], &local) < 1e-6);
+    let doc = fixture::json_of(&out);
+    let mesh = doc["meshes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"] == "Body")
+        .unwrap();
+    let acc = mesh["primitives"][0]["targets"][k]["POSITION"]
+        .as_u64()
+        .unwrap() as usize;
+    let sparse = &doc["accessors"][acc]["sparse"];
+    assert_eq!(sparse["count"], 10, "{}", doc["accessors"][acc]);
+    assert_eq!(
+        doc["accessors"][acc]["min"],
+        serde_json::json!([0.0, 0.0, 0.0])
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -105,6 +105,48 @@ impl GltfAsset {
         push(&mut self.doc, "accessors", a)
     }
 
+    /// A new target's VEC3 f32 delta accessor: [`GltfAsset::vec3`], or, with
+    /// [`GltfAsset::set_sparse_targets`] and fewer than three quarters of the elements nonzero
+    /// (where it is smaller), a
+    /// sparse accessor (no buffer view: zeros, then the nonzero elements' `u32` indices and
+    /// values; `min`/`max` over all elements, the implicit zeros included).
+    pub(super) fn target_vec3(&mut self, p: &[[f32; 3]], bounds: bool) -> usize {
+        let nz: Vec<usize> = (0..p.len()).filter(|&i| p[i] != [0.0; 3]).collect();
+        // Sparse costs 16 bytes an element listed (index and value), dense 12 an element.
+        if !self.sparse_targets || nz.is_empty() || 4 * nz.len() >= 3 * p.len() {
+            return self.vec3(p, bounds);
+        }
+        let ib: Vec<u8> = nz.iter().flat_map(|&i| (i as u32).to_le_bytes()).collect();
+        let vb: Vec<u8> = nz
+            .iter()
+            .flat_map(|&i| p[i])
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        let iv = self.view(&ib, None);
+        let vv = self.view(&vb, None);
+        let mut a = json!({
+            "componentType": FLOAT, "count": p.len(), "type": "VEC3",
+            "sparse": {
+                "count": nz.len(),
+                "indices": {"bufferView": iv, "componentType": UNSIGNED_INT},
+                "values": {"bufferView": vv},
+            }
+        });
+        if bounds {
+            let mut lo = [0.0f32; 3];
+            let mut hi = [0.0f32; 3];
+            for &i in &nz {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[i][k]);
+                    hi[k] = hi[k].max(p[i][k]);
+                }
+            }
+            a["min"] = json!(lo);
+            a["max"] = json!(hi);
+        }
+        push(&mut self.doc, "accessors", a)
+    }
+
     /// A SCALAR f32 accessor of `values`, sparse (no buffer view, the nonzero values and
     /// their `u32` indices; glTF 2.0 §3.6.2.3) when that is smaller than dense.
     pub(super) fn weights(&mut self, values: &[f32]) -> usize {
@@ -275,7 +317,7 @@ impl GltfAsset {
             let mut objects = Vec::with_capacity(self.primitives.len());
             for p in 0..self.primitives.len() {
                 let r = self.primitives[p].vertices.clone();
-                let mut t = json!({"POSITION": self.vec3(&delta[r], true)});
+                let mut t = json!({"POSITION": self.target_vec3(&delta[r], true)});
                 if let Some(n0) = &base_normals[p] {
                     let (q, tris) = self.local(p, tp);
                     let n1 = to_f32_unit(&vertex_normals(&q, &tris));
@@ -284,7 +326,7 @@ impl GltfAsset {
                         .zip(n0)
                         .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
                         .collect();
-                    t["NORMAL"] = json!(self.vec3(&dn, false));
+                    t["NORMAL"] = json!(self.target_vec3(&dn, false));
                 }
                 objects.push(t);
             }
