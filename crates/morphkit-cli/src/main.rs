@@ -2,6 +2,7 @@
 
 mod cmd;
 mod outputs;
+mod outputs_flags;
 mod util;
 mod weights;
 

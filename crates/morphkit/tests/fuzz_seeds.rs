@@ -272,7 +272,7 @@ fn generated() -> Vec<(&'static str, &'static str, Vec<u8>)> {
 
 /// Writes the generated seeds into `fuzz/seeds` (run by hand, see the module doc).
 #[test]
-#[ignore]
+#[ignore = "writes fuzz/seeds in the checkout: run by hand to regenerate them (CI runs the seed checks above)"]
 fn write_generated_seeds() {
     for (target, name, bytes) in generated() {
         let p = fuzz_dir().join("seeds").join(target).join(name);

@@ -385,10 +385,11 @@ pub fn bake(
                 }
             }
             let delta = sub(&solved[n * m + k * samples.len() + q], &singles);
-            size = size.max(crate::geom::max_distance(
-                &delta,
-                &vec![[0.0; 3]; delta.len()],
-            ));
+            let largest = delta
+                .iter()
+                .map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt())
+                .fold(0.0, f64::max);
+            size = size.max(largest);
             deltas.push(delta);
         }
         if size > options.pair_tolerance * diagonal {

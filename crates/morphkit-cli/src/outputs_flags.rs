@@ -1,0 +1,129 @@
+//! The output flags every subcommand accepts (`--max-targets`, `--quantize`,
+//! `--sparse-targets`, `--no-normals`) and the run's context every output is stamped with
+//! (the flags, the subcommand, the command line): set once by `main`, read by the writers in
+//! [`crate::outputs`], and checked against asset edits, which keep the asset's own encoding.
+
+use morphkit::io::{self, GltfOptions};
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// Options of every written animation, accepted by every subcommand (`global` clap arguments).
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct OutputFlags {
+    /// Most morph targets per mesh in a .glb/.gltf animation (default 200, what WebGL2 viewers
+    /// such as three.js play). A longer animation is split into meshes of at most N targets,
+    /// shown in turn by node scale; 0 never splits (a warning says when viewers will not play
+    /// it). In a user's asset (`blend --rig`, `rig --target X.glb`) a mesh is never split: more
+    /// targets than N is an error, and 0 allows any number.
+    #[arg(long, global = true, value_name = "N")]
+    pub max_targets: Option<usize>,
+    /// Leave vertex normals and normal deltas out of .glb/.gltf output (smaller, shades flat).
+    #[arg(long, global = true)]
+    pub no_normals: bool,
+    /// Quantize .glb/.gltf output (KHR_mesh_quantization, which viewers must support):
+    /// positions and morph deltas as 16-bit integers scaled by the node (within 2.7e-5 of the
+    /// bounding-box diagonal), normals and normal deltas as 8-bit integers. About half the size.
+    /// With `blend --rig X --out Y.glb`: the compact clip's corrective targets as 16-bit
+    /// (the asset's own data stays as it is).
+    #[arg(long, global = true)]
+    pub quantize: bool,
+    /// Store each morph target of .glb/.gltf output as a sparse accessor listing only the
+    /// vertices that move (when that is smaller): for shapes that move part of the mesh.
+    #[arg(long, global = true)]
+    pub sparse_targets: bool,
+}
+
+impl OutputFlags {
+    /// `opts` with these flags applied.
+    pub(crate) fn apply(&self, opts: &mut GltfOptions) {
+        if let Some(n) = self.max_targets {
+            opts.max_targets = n;
+        }
+        if self.no_normals {
+            opts.normals = false;
+        }
+        opts.quantize |= self.quantize;
+        opts.sparse_targets |= self.sparse_targets;
+    }
+}
+
+/// What every output of this run is stamped with: the flags, the subcommand and the command
+/// line.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Context {
+    pub(crate) flags: OutputFlags,
+    pub(crate) subcommand: String,
+    pub(crate) command: String,
+}
+
+static CONTEXT: OnceLock<Context> = OnceLock::new();
+
+/// Records the output flags, the subcommand name and the command line (call once, from main).
+/// Arguments that are not UTF-8 (a file name in another encoding) are recorded lossily, with
+/// U+FFFD for what is not UTF-8: the record is for people, the files are opened by their bytes.
+pub fn set_context(flags: OutputFlags, subcommand: &str) {
+    let command = std::env::args_os()
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect::<Vec<_>>()
+        .join(" ");
+    let _ = CONTEXT.set(Context {
+        flags,
+        subcommand: subcommand.to_string(),
+        command,
+    });
+}
+
+pub(crate) fn context() -> Context {
+    CONTEXT.get().cloned().unwrap_or_default()
+}
+
+/// The most morph targets an edited asset's mesh may have: `--max-targets`, else
+/// [`io::SAFE_MORPH_TARGETS`]; 0 allows any number.
+pub fn asset_max_targets() -> usize {
+    context()
+        .flags
+        .max_targets
+        .unwrap_or(io::SAFE_MORPH_TARGETS)
+}
+
+/// Refuses the output flags that an edit of a user's asset written to `out` does not apply:
+/// the edit keeps the asset's own accessors as they are and stores its new targets as `f32`
+/// (with normal deltas where the asset has normals; [`io::GltfAsset`]), so `--quantize`,
+/// `--sparse-targets` and `--no-normals` would be ignored.
+pub fn check_asset_flags(out: &Path) -> anyhow::Result<()> {
+    refuse_asset_flags(out, false)
+}
+
+/// [`check_asset_flags`] for an edit that adds a compact clip: `--quantize` applies to its
+/// corrective targets ([`io::CompactEncoding::quantize`]), the others are refused.
+pub fn check_compact_asset_flags(out: &Path) -> anyhow::Result<()> {
+    refuse_asset_flags(out, true)
+}
+
+/// Whether `--quantize` was given.
+pub fn quantize_flag() -> bool {
+    context().flags.quantize
+}
+
+pub(crate) fn refuse_asset_flags(out: &Path, quantize_applies: bool) -> anyhow::Result<()> {
+    let f = context().flags;
+    let given: Vec<&str> = [
+        (f.quantize && !quantize_applies, "--quantize"),
+        (f.sparse_targets, "--sparse-targets"),
+        (f.no_normals, "--no-normals"),
+    ]
+    .iter()
+    .filter(|(on, _)| *on)
+    .map(|(_, name)| *name)
+    .collect();
+    if !given.is_empty() {
+        anyhow::bail!(
+            "{}: {} not applied to an edit of the user's asset, which keeps its own accessors and \
+             encoding as they are (they apply to animations written whole); leave {} out",
+            out.display(),
+            given.join(", "),
+            if given.len() == 1 { "it" } else { "them" }
+        );
+    }
+    Ok(())
+}
