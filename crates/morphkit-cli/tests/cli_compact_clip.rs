@@ -13,6 +13,8 @@
 mod common;
 #[path = "../../morphkit/tests/common/gltf_asset.rs"]
 mod fixture;
+#[path = "../../morphkit/tests/common/bulging_tube.rs"]
+mod tube;
 
 use common::split::diagonal;
 use common::*;
@@ -178,71 +180,14 @@ fn a_compact_clip_plays_the_solve_within_its_tolerance() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// A facecap-like rig: a 24 × 30 tube (720 vertices) with 16 targets — 4 bends of the whole
-/// tube (in four directions, which turn its upper part: the linear blend shrinks there) and 12
-/// local bulges — and 300 keys at 30 fps: each bend rises and falls in its own window, the
-/// bulges vary smoothly throughout, several at once.
+/// The facecap-like rig of `bulging_tube.rs` as an asset, its clip named "Wave".
 fn long_clip_spec() -> fixture::Spec {
-    let (nu, nv) = (24, 30);
-    let (p, tris) = fixture::tube(nu, nv, 1.0, 0.0);
-    let (bent, _) = fixture::tube(nu, nv, 1.0, 1.4);
-    let mut targets = Vec::new();
-    let mut names = Vec::new();
-    for dir in 0..4 {
-        let a = std::f64::consts::FRAC_PI_2 * dir as f64;
-        let (c, sn) = (a.cos(), a.sin());
-        // The bend in the xz plane, turned about z by a.
-        targets.push(
-            bent.iter()
-                .zip(&p)
-                .map(|(q, r)| {
-                    let (dx, dy) = (q[0] - r[0], q[1] - r[1]);
-                    [r[0] + c * dx - sn * dy, r[1] + sn * dx + c * dy, q[2]]
-                })
-                .collect(),
-        );
-        names.push(format!("bend{dir}"));
-    }
-    for b in 0..12 {
-        // A bump of radius 0.35 around (angle, height), pushed out along the normal by 0.3.
-        let (ang, h) = (
-            std::f64::consts::TAU * b as f64 / 12.0,
-            0.5 + 0.25 * b as f64,
-        );
-        targets.push(
-            p.iter()
-                .map(|q| {
-                    let da = (q[1].atan2(q[0]) - ang + std::f64::consts::PI)
-                        .rem_euclid(std::f64::consts::TAU)
-                        - std::f64::consts::PI;
-                    let d2 = (da * da + (q[2] - h).powi(2)) / (0.35 * 0.35);
-                    let s = 0.3 * (-d2).exp();
-                    [q[0] * (1.0 + s), q[1] * (1.0 + s), q[2]]
-                })
-                .collect(),
-        );
-        names.push(format!("bulge{b}"));
-    }
-    let keys = (0..300)
-        .map(|k| {
-            let t = k as f64 / 30.0;
-            let mut w = Vec::with_capacity(16);
-            for dir in 0..4 {
-                // Bend `dir` up and down over [2.5 dir, 2.5 dir + 2.5) seconds.
-                let x = (t - 2.5 * dir as f64) / 2.5;
-                let on = if (0.0..1.0).contains(&x) {
-                    (std::f64::consts::PI * x).sin().powi(2)
-                } else {
-                    0.0
-                };
-                w.push(0.9 * on);
-            }
-            for b in 0..12 {
-                let x = (0.9 + 0.17 * b as f64) * t + 1.3 * b as f64;
-                w.push(0.8 * x.sin().max(0.0).powi(2));
-            }
-            (t as f32, w.iter().map(|&x| x as f32).collect())
-        })
+    let (p, tris) = fixture::tube(tube::NU, tube::NV, 1.0, 0.0);
+    let (bent, _) = fixture::tube(tube::NU, tube::NV, 1.0, tube::BEND);
+    let (targets, names) = tube::targets(&p, &bent);
+    let keys = tube::keys()
+        .into_iter()
+        .map(|(t, w)| (t as f32, w.iter().map(|&x| x as f32).collect()))
         .collect();
     fixture::Spec {
         prims: vec![fixture::Prim {

@@ -8,14 +8,23 @@
 //! ```
 //!
 //! RIG: `horse` (ten poses), `ict` (ten expressions), `twist:DEG` (a generated neck whose head
-//! turns DEG° about the neck with a 20° roll), `buckle` (a thin sheet pushed together).
-//! TARGET: a target's index from 0. `PROFILE=1` prints every frame, `BOUND=0` every step's
+//! turns DEG° about the neck with a 20° roll), `buckle` (a thin sheet pushed together),
+//! `bulges` (the compact-clip tests' tube with 4 bends and 12 bulges, which kinks; its clip's
+//! keys are its paths: `PATH_KEYS=A:B` sweeps the straight path from key A's weights to key B's in
+//! STEPS steps instead of one target, `KEYS=A:B` solves keys A to B themselves).
+//! TARGET: a target's index from 0. `RAY=K` solves each frame by continuation along the ray
+//! from the rest shape (K steps, each started from the last equilibrium moved as the
+//! predictor moves) instead of the canonical fresh start. `PROFILE=1` prints every frame, `BOUND=0` every step's
 //! ratio, `DUMP=DIR` writes every frame's positions; `CONTINUE=1`, `STAGES=μ,…`, `TETHER`,
 //! `HINGE`, `HOLD_RAMP` and `NO_SAMPLED=1` try the variants docs/choices.md measured
 //! ("Continuity in the weights").
 
 #[path = "../tests/common/mod.rs"]
 mod common;
+#[path = "../tests/common/gltf_asset.rs"]
+mod fixture;
+#[path = "../tests/common/bulging_tube.rs"]
+mod tube;
 
 use morphkit::io::read_shape_set;
 use morphkit::mesh::generate::{buckling_sheet_rig, turning_head_rig};
@@ -38,6 +47,15 @@ fn main() {
         }
         "ict" => read_shape_set(&common::ict_rig_paths().expect("set MORPHKIT_DATA")).unwrap(),
         "buckle" => buckling_sheet_rig(),
+        "bulges" => {
+            let (p, tris) = fixture::tube(tube::NU, tube::NV, 1.0, 0.0);
+            let (bent, _) = fixture::tube(tube::NU, tube::NV, 1.0, tube::BEND);
+            let (targets, names) = tube::targets(&p, &bent);
+            let base = morphkit::mesh::TriMesh::new(p.clone(), tris);
+            let mut all = vec![("rest".to_string(), p)];
+            all.extend(names.into_iter().zip(targets));
+            morphkit::mesh::ShapeSet::new(base, all).unwrap()
+        }
         r => {
             let mut it = r.trim_start_matches("twist:").split(':');
             let deg: f64 = it.next().and_then(|d| d.parse().ok()).unwrap_or(180.0);
@@ -104,13 +122,40 @@ fn main() {
         );
         return;
     }
-    let weights: Vec<Weights> = (0..=steps)
-        .map(|k| {
-            let mut w = vec![0.0; n];
-            w[target] = from + (to - from) * k as f64 / steps as f64;
-            Weights::Delta(w)
-        })
-        .collect();
+    let keys = |v: &str| -> (usize, usize) {
+        let (a, b) = v.split_once(':').expect("A:B");
+        (a.parse().unwrap(), b.parse().unwrap())
+    };
+    let clip = || tube::keys().into_iter().map(|(_, w)| w).collect::<Vec<_>>();
+    let weights: Vec<Weights> = if let Ok(v) = std::env::var("PATH_KEYS") {
+        let ((a, b), k) = (keys(&v), clip());
+        (0..=steps)
+            .map(|s| {
+                let t = s as f64 / steps as f64;
+                Weights::Delta(
+                    k[a].iter()
+                        .zip(&k[b])
+                        .map(|(x, y)| x + t * (y - x))
+                        .collect(),
+                )
+            })
+            .collect()
+    } else if let Ok(v) = std::env::var("KEYS") {
+        let ((a, b), k) = (keys(&v), clip());
+        k[a..=b].iter().map(|w| Weights::Delta(w.clone())).collect()
+    } else {
+        (0..=steps)
+            .map(|k| {
+                let mut w = vec![0.0; n];
+                w[target] = from + (to - from) * k as f64 / steps as f64;
+                Weights::Delta(w)
+            })
+            .collect()
+    };
+    let ray: usize = std::env::var("RAY")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
     let bound: f64 = std::env::var("BOUND")
         .ok()
         .and_then(|b| b.parse().ok())
@@ -144,6 +189,7 @@ fn main() {
                 r.stats.newton_iterations += extra;
                 r
             }
+            _ if ray > 0 => along_ray(&mut solver, w, ray),
             _ => solver.solve(w).unwrap(),
         };
         if continuation {
@@ -198,4 +244,36 @@ fn main() {
         secs.last().unwrap(),
         t0.elapsed().as_secs_f64()
     );
+}
+
+/// The equilibrium at `w` reached along the ray from the rest shape: `k` solves at `(j/k) w`,
+/// the first from the canonical start, each next one from the last equilibrium moved as the
+/// predictor moves; its statistics are the last solve's with every solve's Newton iterations.
+fn along_ray(solver: &mut PhysicalBlend, w: &Weights, k: usize) -> morphkit::springs::BlendResult {
+    let Weights::Delta(w) = w else {
+        panic!("delta weights")
+    };
+    let mut last: Option<(morphkit::springs::BlendResult, Vec<morphkit::mesh::Point>)> = None;
+    let mut iterations = 0;
+    for j in 1..=k {
+        let wj = Weights::Delta(w.iter().map(|v| v * j as f64 / k as f64).collect());
+        let q = solver.predict(&wj).unwrap();
+        let r = match &last {
+            None => solver.solve(&wj).unwrap(),
+            Some((r, p)) => {
+                let start: Vec<_> = r
+                    .positions
+                    .iter()
+                    .zip(p.iter().zip(&q))
+                    .map(|(x, (p, q))| std::array::from_fn(|i| x[i] + q[i] - p[i]))
+                    .collect();
+                solver.solve_with(&wj, &[], Some(&start)).unwrap()
+            }
+        };
+        iterations += r.stats.newton_iterations;
+        last = Some((r, q));
+    }
+    let mut r = last.expect("k > 0").0;
+    r.stats.newton_iterations = iterations;
+    r
 }
