@@ -2,7 +2,11 @@
 // Plays GLBs morphkit writes in three.js (GLTFLoader + AnimationMixer) in headless Chromium and
 // compares them with the OBJ frames they were made from.
 //
-// Usage: node check.mjs [--shots DIR] [--tol REL] FILE.glb FRAMES_DIR [FILE.glb FRAMES_DIR ...]
+// Usage: node check.mjs [--shots DIR] [--tol REL] [--bake WEIGHTS.csv] FILE.glb FRAMES_DIR [...]
+//
+// With --bake, each GLB is a baked rig (`morphkit bake`) and is played not by its clip but by
+// the slider weights of each CSV row (header: the sliders' names), through the JavaScript
+// evaluation in docs/bake.md itself (its ```js block, loaded as a module), frame k for row k.
 //
 // For each pair: serves the GLB, three.js (from node_modules) and the OBJ frames (frame_*.obj,
 // sorted) on localhost; loads the GLB with GLTFLoader; steps the AnimationMixer to every key;
@@ -25,10 +29,12 @@ const here = path.dirname(fileURLToPath(import.meta.url));
 const args = process.argv.slice(2);
 let shots = null;
 let tol = 1e-6;
+let bake = null;
 const pairs = [];
 for (let i = 0; i < args.length; i++) {
   if (args[i] === '--shots') shots = args[++i];
   else if (args[i] === '--tol') tol = Number(args[++i]);
+  else if (args[i] === '--bake') bake = args[++i];
   else pairs.push(args[i]);
 }
 if (pairs.length === 0 || pairs.length % 2 !== 0) {
@@ -54,6 +60,19 @@ function objPositions(text) {
 }
 
 const files = new Map();
+if (bake) {
+  // The slider rows, and docs/bake.md's evaluation as a module.
+  const rows = (await readFile(bake, 'utf8')).trim().split('\n').slice(1)
+    .map((l) => l.split(',').map(Number));
+  files.set('/bake-rows.json', Buffer.from(JSON.stringify(rows)));
+  const doc = await readFile(path.join(here, '..', '..', 'docs', 'bake.md'), 'utf8');
+  const js = /```js\n([\s\S]*?)```/.exec(doc);
+  if (!js) {
+    console.error('check.mjs: docs/bake.md has no ```js block');
+    process.exit(2);
+  }
+  files.set('/bake.js', Buffer.from(`${js[1]}\nexport { playBake };\n`));
+}
 for (let i = 0; i < pairs.length; i += 2) {
   const id = String(i / 2);
   const dir = pairs[i + 1];
@@ -111,7 +130,7 @@ try {
     page.on('pageerror', (e) => glErrors.push(String(e)));
     await page.goto(`http://127.0.0.1:${port}/`);
     await page.waitForFunction(() => window.ready === true);
-    const r = await page.evaluate(([id, w, h]) => window.runCheck(id, w, h), [id, width, height]);
+    const r = await page.evaluate(([id, w, h, b]) => window.runCheck(id, w, h, b), [id, width, height, bake !== null]);
     const problems = [];
     if (r.frames !== r.keys) problems.push(`${r.keys} keys for ${r.frames} frames`);
     if (!(r.relErr <= tol)) problems.push(`positions differ by ${r.relErr.toExponential(2)} of the diagonal (frame ${r.worstFrame})`);

@@ -48,6 +48,28 @@ node "$here/check.mjs" --shots "$out/shots" \
 "$bin" convert "$out/tube2100" --quantize --sparse-targets "$out/tube2100-packed.glb"
 node "$here/check.mjs" --tol 1e-4 --shots "$out/shots" "$out/tube2100-packed.glb" "$out/tube2100" \
   | tee -a "$out/results.jsonl"
+# A baked rig (issue 56): the cylinder with two targets (bend-4 and pose1-4, through a frame
+# sequence), baked with in-betweens and combination shapes; three.js plays it through the
+# JavaScript evaluation in docs/bake.md (check.mjs --bake loads that block itself), row by row
+# equal to the library's evaluation that `bake --check-frames` writes. The same rows compared
+# with the linear blend must fail: the check sees what the mapping adds.
+mkdir -p "$out/bake-seq"
+cp "$cyl/cylinder-rest.obj" "$out/bake-seq/frame_0000.obj"
+cp "$cyl/cylinder-bend-4.obj" "$out/bake-seq/frame_0001.obj"
+cp "$cyl/cylinder-pose1-4.obj" "$out/bake-seq/frame_0002.obj"
+"$bin" convert "$out/bake-seq" "$out/bake-rig.glb" --force
+printf 'frame_0001,frame_0002\n0.5,0\n0,0.7\n0.5,0.5\n1,1\n0.8,0.3\n0.3,0.9\n1.2,0.9\n' >"$out/bake-rows.csv"
+"$bin" bake --rig "$out/bake-rig.glb" --out "$out/bake-baked.glb" --check "$out/bake-rows.csv" \
+  --check-frames "$out/bake-played" --force
+node "$here/check.mjs" --bake "$out/bake-rows.csv" --shots "$out/shots" \
+  "$out/bake-baked.glb" "$out/bake-played" | tee -a "$out/results.jsonl"
+"$bin" blend --rig "$out/bake-rig.glb" --linear --weights-file "$out/bake-rows.csv" \
+  --out "$out/bake-linear" --force
+if node "$here/check.mjs" --bake "$out/bake-rows.csv" "$out/bake-baked.glb" "$out/bake-linear" \
+  >"$out/bake-linear.jsonl"; then
+  echo "threejs-check: the baked rig played like the linear blend; the bake check is broken" >&2
+  exit 1
+fi
 # An artist's own asset (issue 37): Blender exports the cylinder rig flat shaded (every triangle
 # its own vertices) with a UV map, a material and a shape key, and again smooth with Smart UV
 # Project seams and two materials, one with an image texture (two primitives); `blend --rig`

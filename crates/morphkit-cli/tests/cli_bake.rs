@@ -194,6 +194,90 @@ fn a_baked_asset_plays_the_bake_through_its_mapping() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// `--check` solves each row in full and reports the bake's and the linear blend's distances
+/// from it; `--check-frames` writes what a client plays there: the library's evaluation.
+#[test]
+fn a_bake_checks_itself_against_the_full_solve() {
+    let d = tmp_dir("bake-check");
+    let input = d.join("in.glb");
+    fixture::write(&input, &fixture::standard(false, 100.0));
+    let rows = d.join("rows.csv");
+    std::fs::write(&rows, "lift,bend\n0.5,0.5\n1,1\n0.3,0.8\n0,0.6\n").unwrap();
+    let (report, played) = (d.join("r.json"), d.join("played"));
+    let (_, err) = run_ok(&[
+        "bake",
+        "--rig",
+        s(&input),
+        "--inbetweens",
+        "3",
+        "--out",
+        s(&d.join("baked.glb")),
+        "--check",
+        s(&rows),
+        "--check-frames",
+        s(&played),
+        "--report",
+        s(&report),
+    ]);
+    assert!(err.contains("checked 4 states"), "{err}");
+    let r: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let check = r["check"].as_array().unwrap();
+    assert_eq!(check.len(), 4);
+    // The header names the sliders in another order than the mesh (bend, lift).
+    assert_eq!(check[2]["weights"], serde_json::json!([0.8, 0.3]));
+    let Library { shapes, baked, .. } = library_bake(&input);
+    let frames = morphkit::io::read_animation(&played, None).unwrap();
+    assert_eq!(frames.len(), 4);
+    let diag = shapes.base().bbox_diagonal();
+    for (k, c) in check.iter().enumerate() {
+        let (b, l) = (
+            c["bake_error"].as_f64().unwrap(),
+            c["linear_error"].as_f64().unwrap(),
+        );
+        assert!(b.is_finite() && l > 0.0 && c["converged"] == true, "{c}");
+        let w: Vec<f64> = serde_json::from_value(c["weights"].clone()).unwrap();
+        let e = max_distance(frames.positions(k), &baked.evaluate(&w)) / diag;
+        assert!(
+            e <= 1e-6,
+            "row {k}: the written frame is {e} from the evaluation"
+        );
+    }
+    // At the pair's samples the bake is the solve itself; elsewhere it is closer than linear.
+    for c in &check[..2] {
+        assert!(c["bake_error"].as_f64().unwrap() <= 1e-9, "{c}");
+    }
+    for c in &check[2..] {
+        assert!(
+            c["bake_error"].as_f64().unwrap() < c["linear_error"].as_f64().unwrap(),
+            "{c}"
+        );
+    }
+    // --check-frames needs --check; a row naming no slider is refused before any solve.
+    let e = fails(&[
+        "bake",
+        "--rig",
+        s(&input),
+        "--out",
+        s(&d.join("x.glb")),
+        "--check-frames",
+        s(&d.join("p2")),
+    ]);
+    assert!(e.contains("--check"), "{e}");
+    std::fs::write(&rows, "chin\n0.5\n").unwrap();
+    let e = fails(&[
+        "bake",
+        "--rig",
+        s(&input),
+        "--out",
+        s(&d.join("x.glb")),
+        "--check",
+        s(&rows),
+    ]);
+    assert!(e.contains("chin") && !e.contains("baking"), "{e}");
+    assert!(!d.join("x.glb").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 #[test]
 fn a_usd_bake_plays_the_bake_through_usdskel() {
     let d = tmp_dir("bake-usd");

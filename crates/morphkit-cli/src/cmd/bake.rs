@@ -6,11 +6,13 @@
 //! shapes are [`morphkit::bake::bake`]'s, on the welded rig, written in the asset's layout.
 
 use crate::outputs::{Kind, Plan};
+use crate::weights::{self, Origin};
 use anyhow::{bail, Context};
 use morphkit::bake::{bake, BakeOptions};
+use morphkit::geom::max_distance;
 use morphkit::io::{Format, GltfAsset, GltfReadOptions};
 use morphkit::mesh::{ShapeSet, Weld, WELD_TOLERANCE};
-use morphkit::springs::{BlendOptions, PhysicalBlend};
+use morphkit::springs::{BlendOptions, PhysicalBlend, Weights};
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -20,6 +22,7 @@ Examples:
   morphkit bake --rig face.glb --out face-baked.glb
   morphkit bake --rig face.glb --mesh Head --inbetweens 3 --report bake.json --out baked.glb
   morphkit bake --rig face.glb --out face-baked.usda
+  morphkit bake --rig face.glb --out baked.glb --check poses.csv --check-frames played/ --report bake.json
 
 The output plays in any glTF viewer as the linear blend of the sliders' targets; the physical
 look needs the sliders mapped to the baked targets' weights (mesh.extras.morphkitBake; about
@@ -48,6 +51,16 @@ pub struct BakeArgs {
     /// A JSON report: counts, sizes and timings.
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Slider weights to check the bake at: a CSV whose header names the targets, one state
+    /// per row (as `blend --weights-file`). Each row is solved in full and compared with the
+    /// bake's evaluation (what a client plays) and with the linear blend; `--report` lists the
+    /// distances (`check`), and a line says the worst.
+    #[arg(long)]
+    pub check: Option<PathBuf>,
+    /// The bake's evaluation at each `--check` row, as an animation (a frame directory,
+    /// .pc2, .glb or .usda): the positions a client playing the baked rig shows.
+    #[arg(long, requires = "check")]
+    pub check_frames: Option<PathBuf>,
     /// Threads for the solves (default: the machine's cores); the result does not depend on it.
     #[arg(long)]
     pub threads: Option<usize>,
@@ -77,11 +90,13 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
     if options.inbetweens == 0 {
         bail!("--inbetweens must be at least 1");
     }
-    let inputs = vec![a.rig.clone()];
+    let mut inputs = vec![a.rig.clone()];
+    inputs.extend(a.check.iter().cloned());
     let mut outputs = Plan::new(&inputs)
         .force(a.force)
         .output("--out", &a.out, Kind::Mesh)
         .output_opt("--report", a.report.as_ref(), Kind::Json)
+        .output_opt("--check-frames", a.check_frames.as_ref(), Kind::Animation)
         .check()?;
     crate::outputs::check_asset_flags(&a.out)?;
     crate::util::announce_reading(&inputs);
@@ -104,6 +119,10 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
     asset.check_room(most).context(
         "the bake adds in-betweens and combination shapes; lower --inbetweens or --max-pairs",
     )?;
+    let check_rows = match &a.check {
+        Some(f) => check_rows(f, &m.target_names)?,
+        None => Vec::new(),
+    };
     let named = std::iter::once(("base".to_string(), m.base.positions.clone()))
         .chain(m.target_names.iter().cloned().zip(m.targets.clone()))
         .collect();
@@ -120,6 +139,22 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
     let t_bake = Instant::now();
     let baked = bake(&mut solver, &options, threads)?.unweld(&weld, &welded);
     let bake_seconds = t_bake.elapsed().as_secs_f64();
+    let checked = check(&mut solver, &weld, &shapes, &baked, &check_rows)?;
+    if let (Some(path), false) = (&a.check_frames, checked.is_empty()) {
+        let frames = ShapeSet::new(
+            shapes.base().clone(),
+            checked
+                .iter()
+                .enumerate()
+                .map(|(k, c)| (format!("frame_{k:04}"), c.played.clone()))
+                .collect(),
+        )?;
+        let opts = morphkit::io::FramesOptions {
+            inputs: inputs.clone(),
+            ..Default::default()
+        };
+        outputs.frames(path, &frames, &opts, |_| {})?;
+    }
     let added = if usd {
         outputs.usd_bake(&a.out, shapes.base(), &baked, &m.target_names, &inputs)?;
         baked.num_shapes() - n
@@ -142,11 +177,32 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
             "shapes_total": n + added,
             "solves": n * options.inbetweens + n * (n - 1) / 2 * options.pair_samples.len(),
             "threads": threads,
+            "check": checked.iter().map(|c| json!({
+                "weights": c.weights,
+                "bake_error": c.bake_error,
+                "linear_error": c.linear_error,
+                "converged": c.converged,
+            })).collect::<Vec<_>>(),
             "timings": { "bake_seconds": bake_seconds, "total_seconds": start.elapsed().as_secs_f64() },
         });
         outputs.json(r, &report)?;
     }
     outputs.commit()?;
+    if let Some(worst) = checked
+        .iter()
+        .max_by(|x, y| x.bake_error.total_cmp(&y.bake_error))
+    {
+        let closer = checked
+            .iter()
+            .filter(|c| c.bake_error < c.linear_error)
+            .count();
+        eprintln!(
+            "checked {} states: the bake is within {:.2e} of the diagonal of the full solve (the linear blend {:.2e} there); closer than the linear blend in {closer}",
+            checked.len(),
+            worst.bake_error,
+            worst.linear_error
+        );
+    }
     eprintln!(
         "baked {n} targets into {} in-betweens and {} combination shapes ({added} shapes added) in {}",
         n * options.inbetweens,
@@ -154,4 +210,64 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
         a.out.display()
     );
     Ok(())
+}
+
+/// One `--check` state: its slider weights, what the bake plays there, and the distances of
+/// that and of the linear blend from the full solve (largest vertex distance over the base's
+/// bounding-box diagonal).
+struct Checked {
+    weights: Vec<f64>,
+    played: Vec<morphkit::mesh::Point>,
+    bake_error: f64,
+    linear_error: f64,
+    converged: bool,
+}
+
+/// The rows of the `--check` file `f`, checked as `blend --weights-file` checks them.
+fn check_rows(f: &std::path::Path, names: &[String]) -> anyhow::Result<Vec<Vec<f64>>> {
+    let rows = morphkit::io::read_named_weights(f, names)?;
+    let mut out = Vec::with_capacity(rows.len());
+    for (frame, row) in rows.iter().enumerate() {
+        let w = Weights::Delta(row.values.clone());
+        weights::check(
+            &w,
+            names.len() + 1,
+            Origin::File {
+                path: f,
+                row,
+                frame,
+            },
+        )?;
+        out.push(row.values.clone());
+    }
+    Ok(out)
+}
+
+/// Solves every row in full (on the welded rig, each copy then given its own position) and
+/// compares it with `baked`'s evaluation and the linear blend.
+fn check(
+    solver: &mut PhysicalBlend,
+    weld: &Weld,
+    shapes: &ShapeSet,
+    baked: &morphkit::bake::BakedRig,
+    rows: &[Vec<f64>],
+) -> anyhow::Result<Vec<Checked>> {
+    let diag = morphkit::mesh::bbox_diagonal(shapes.positions(0)).max(f64::MIN_POSITIVE);
+    let mut out = Vec::with_capacity(rows.len());
+    for w in rows {
+        let x = Weights::Delta(w.clone());
+        let r = solver.solve(&x)?;
+        let c = x.coefficients(shapes.len())?;
+        let solved = weld.scatter_frame(&r.positions, &c);
+        let played = baked.evaluate(w);
+        let linear = morphkit::springs::linear_blend(shapes, &x)?;
+        out.push(Checked {
+            weights: w.clone(),
+            bake_error: max_distance(&played, &solved) / diag,
+            linear_error: max_distance(&linear, &solved) / diag,
+            converged: r.stats.converged,
+            played,
+        });
+    }
+    Ok(out)
 }
