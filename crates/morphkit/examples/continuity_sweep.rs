@@ -9,14 +9,16 @@
 //!
 //! RIG: `horse` (ten poses), `ict` (ten expressions), `twist:DEG` (a generated neck whose head
 //! turns DEG° about the neck with a 20° roll), `buckle` (a thin sheet pushed together),
+//! `files:BASE,TARGET,…` (meshes under MORPHKIT_DATA, the first the base),
 //! `bulges` (the compact-clip tests' tube with 4 bends and 12 bulges, which kinks; its clip's
 //! keys are its paths: `PATH_KEYS=A:B` sweeps the straight path from key A's weights to key B's in
 //! STEPS steps instead of one target, `KEYS=A:B` solves keys A to B themselves).
-//! TARGET: a target's index from 0. `RAY=K` solves each frame by continuation along the ray
+//! TARGET: a target's index from 0. `EIGHTHS=1` starts each frame of a single-target sweep
+//! from the predictor corrected by that target's equilibria at every eighth. `RAY=K` solves each frame by continuation along the ray
 //! from the rest shape (K steps, each started from the last equilibrium moved as the
 //! predictor moves) instead of the canonical fresh start. `PROFILE=1` prints every frame, `BOUND=0` every step's
 //! ratio, `DUMP=DIR` writes every frame's positions; `CONTINUE=1`, `STAGES=μ,…`, `TETHER`,
-//! `HINGE`, `HOLD_RAMP` and `NO_SAMPLED=1` try the variants docs/choices.md measured
+//! `HINGE`, `GUARD` (the fold guard's weight), `HOLD_RAMP` and `NO_SAMPLED=1` try the variants docs/choices.md measured
 //! ("Continuity in the weights").
 
 #[path = "../tests/common/mod.rs"]
@@ -47,6 +49,11 @@ fn main() {
         }
         "ict" => read_shape_set(&common::ict_rig_paths().expect("set MORPHKIT_DATA")).unwrap(),
         "buckle" => buckling_sheet_rig(),
+        r if r.starts_with("files:") => {
+            // files:BASE,TARGET,…: meshes under MORPHKIT_DATA, the first the base.
+            let p: Vec<_> = r["files:".len()..].split(',').map(data).collect();
+            read_shape_set(&p).unwrap()
+        }
         "bulges" => {
             let (p, tris) = fixture::tube(tube::NU, tube::NV, 1.0, 0.0);
             let (bent, _) = fixture::tube(tube::NU, tube::NV, 1.0, tube::BEND);
@@ -77,6 +84,9 @@ fn main() {
     }
     if let Some(h) = std::env::var("HINGE").ok().and_then(|v| v.parse().ok()) {
         options.hinges.weight = h;
+    }
+    if let Some(g) = std::env::var("GUARD").ok().and_then(|v| v.parse().ok()) {
+        options.fold_guard = g;
     }
     if let Some(h) = std::env::var("HOLD_RAMP").ok().and_then(|v| v.parse().ok()) {
         options.hold_ramp = h;
@@ -152,6 +162,22 @@ fn main() {
             })
             .collect()
     };
+    let eighths: Option<Vec<Vec<morphkit::mesh::Point>>> =
+        std::env::var("EIGHTHS").ok().map(|_| {
+            (0..=8)
+                .map(|k| {
+                    let mut w = vec![0.0; n];
+                    w[target] = k as f64 / 8.0;
+                    let w = Weights::Delta(w);
+                    let x = solver.solve(&w).unwrap().positions;
+                    let p = solver.predict(&w).unwrap();
+                    x.iter()
+                        .zip(&p)
+                        .map(|(x, p)| std::array::from_fn(|i| x[i] - p[i]))
+                        .collect()
+                })
+                .collect()
+        });
     let ray: usize = std::env::var("RAY")
         .ok()
         .and_then(|v| v.parse().ok())
@@ -190,6 +216,24 @@ fn main() {
                 r
             }
             _ if ray > 0 => along_ray(&mut solver, w, ray),
+            _ if eighths.is_some() => {
+                // EIGHTHS=1: the predictor corrected by the target's own equilibria at the
+                // eighths (solved first, canonically), interpolated linearly.
+                let e = eighths.as_ref().unwrap();
+                let Weights::Delta(d) = w else { panic!() };
+                let a = d[target];
+                let q = solver.predict(w).unwrap();
+                let k = ((a * 8.0).floor() as usize).min(7);
+                let t = a * 8.0 - k as f64;
+                let start: Vec<_> = (0..q.len())
+                    .map(|v| {
+                        std::array::from_fn(|i| {
+                            q[v][i] + (1.0 - t) * e[k][v][i] + t * e[k + 1][v][i]
+                        })
+                    })
+                    .collect();
+                solver.solve_with(w, &[], Some(&start)).unwrap()
+            }
             _ => solver.solve(w).unwrap(),
         };
         if continuation {

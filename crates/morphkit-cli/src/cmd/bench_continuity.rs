@@ -4,9 +4,14 @@
 //! moves some vertex more than [`JUMP_BOUND`] times the linear blend's largest move for the
 //! same step ([`ContinuityCheck`]). Per rig: sweeps, pops, the worst step ratio, the
 //! distribution of Newton iterations (median, 99th percentile, largest) and of frame times
-//! (median, largest, and the largest over the median). Rigs: generated necks whose head
-//! turns 170–190° with a roll or bends back by 180°, and, with the data, the horse's ten
-//! poses and the ICT head's ten expressions, welded as `blend` welds them.
+//! (median, largest, and the largest over the median). Each pop's step is then halved: a
+//! *snap* (a discontinuity: the motion leaves one equilibrium for another) keeps its move in
+//! one half, whose ratio about doubles, while a *fast step* (the equilibrium moving smoothly
+//! faster than the bound allows) keeps its ratio; a pop counts as a snap when a half's ratio
+//! is over [`SNAP_GROWTH`] times the step's. Rigs: generated necks whose head turns 170–190°
+//! with a roll or bends back by 180°, and, with the data, cragl's cylinder with its eight
+//! bends and poses, the horse's ten poses and the ICT head's ten expressions, welded as
+//! `blend` welds them.
 
 use super::bench_scrub::real_rigs;
 use morphkit::mesh::generate::turning_head_rig;
@@ -16,6 +21,43 @@ use morphkit::springs::{
 };
 use serde_json::{json, Value};
 use std::path::Path;
+
+/// A pop is a snap when halving its step leaves a half whose ratio is over this multiple of
+/// the step's (a discontinuity's move stays whole in one half, doubling its ratio; a smooth
+/// motion's ratio stays about the same).
+pub const SNAP_GROWTH: f64 = 1.5;
+
+/// The step ratio between the frames at `a` and `b`: the largest vertex move over the linear
+/// blend's largest move.
+fn step_ratio(
+    solver: &mut PhysicalBlend,
+    shapes: &ShapeSet,
+    a: &Weights,
+    b: &Weights,
+) -> anyhow::Result<f64> {
+    let (xa, xb) = (solver.solve(a)?.positions, solver.solve(b)?.positions);
+    let (la, lb) = (linear_blend(shapes, a)?, linear_blend(shapes, b)?);
+    let most = |p: &[morphkit::mesh::Point], q: &[morphkit::mesh::Point]| {
+        morphkit::geom::max_distance(p, q)
+    };
+    Ok(most(&xa, &xb) / most(&la, &lb).max(f64::MIN_POSITIVE))
+}
+
+/// Whether the pop between `a` and `b` (ratio `ratio`) is a snap: see [`SNAP_GROWTH`].
+fn is_snap(
+    solver: &mut PhysicalBlend,
+    shapes: &ShapeSet,
+    a: &Weights,
+    b: &Weights,
+    ratio: f64,
+) -> anyhow::Result<bool> {
+    let (Weights::Delta(x), Weights::Delta(y)) = (a, b) else {
+        return Ok(true);
+    };
+    let mid = Weights::Delta(x.iter().zip(y).map(|(p, q)| 0.5 * (p + q)).collect());
+    let halves = step_ratio(solver, shapes, a, &mid)?.max(step_ratio(solver, shapes, &mid, b)?);
+    Ok(halves > SNAP_GROWTH * ratio)
+}
 
 /// The weights of a path from `from` to `to` in `steps` steps.
 fn path(from: &[f64], to: &[f64], steps: usize) -> Vec<Weights> {
@@ -50,6 +92,7 @@ fn rig_row(name: &str, shapes: &ShapeSet, steps: usize) -> anyhow::Result<Value>
     solver.prepare(&paths.concat(), 1);
     let prepare_seconds = t_prepare.elapsed().as_secs_f64();
     let (mut pops, mut worst, mut unconverged) = (0, 0.0f64, 0);
+    let mut snaps: Vec<Value> = Vec::new();
     let (mut iterations, mut seconds) = (Vec::new(), Vec::new());
     for weights in &paths {
         let mut check = ContinuityCheck::new(JUMP_BOUND, diagonal);
@@ -63,6 +106,15 @@ fn rig_row(name: &str, shapes: &ShapeSet, steps: usize) -> anyhow::Result<Value>
         let c = check.finish();
         pops += c.jumps.len();
         worst = worst.max(c.worst_ratio);
+        for j in &c.jumps {
+            let [a, b] = j.frames;
+            if is_snap(&mut solver, shapes, &weights[a], &weights[b], j.ratio)? {
+                let Weights::Delta(w) = &weights[a] else {
+                    continue;
+                };
+                snaps.push(json!({"from": w, "ratio": j.ratio}));
+            }
+        }
     }
     iterations.sort_unstable();
     seconds.sort_by(f64::total_cmp);
@@ -76,6 +128,9 @@ fn rig_row(name: &str, shapes: &ShapeSet, steps: usize) -> anyhow::Result<Value>
         "frames": iterations.len(),
         "steps": steps,
         "pops": pops,
+        "snaps": snaps.len(),
+        "fast_steps": pops - snaps.len(),
+        "snap_states": snaps,
         "worst_step_ratio": worst,
         "unconverged": unconverged,
         "newton_median": at(50),
@@ -87,8 +142,9 @@ fn rig_row(name: &str, shapes: &ShapeSet, steps: usize) -> anyhow::Result<Value>
         "frame_seconds_max_over_median": max_s / median_s.max(1e-9),
     });
     println!(
-        "continuity {name}: {} sweeps of {steps} steps, {pops} pops, worst step {worst:.2}× linear, {unconverged} unconverged; Newton median {} p99 {} max {}; frame {:.3} s median, {:.3} s max (after {:.1} s of sample solves)",
+        "continuity {name}: {} sweeps of {steps} steps, {pops} pops ({} snaps, the rest fast steps), worst step {worst:.2}× linear, {unconverged} unconverged; Newton median {} p99 {} max {}; frame {:.3} s median, {:.3} s max (after {:.1} s of sample solves)",
         paths.len(),
+        snaps.len(),
         at(50),
         at(99),
         iterations[iterations.len() - 1],
@@ -107,6 +163,20 @@ pub fn run_continuity_bench(data_dir: Option<&Path>, steps: usize) -> anyhow::Re
         rows.push(rig_row(&name, &turning_head_rig(turn, roll), steps)?);
     }
     if let Some(dir) = data_dir {
+        let cyl = dir.join("cragl-bending-cylinder");
+        let cylinder = super::bench_scrub::read_rig(
+            &cyl.join("cylinder-rest.obj"),
+            &[
+                "bend-1", "bend-2", "bend-3", "bend-4", "pose1-1", "pose1-2", "pose1-3", "pose1-4",
+            ]
+            .map(|t| cyl.join(format!("cylinder-{t}.obj"))),
+        )?
+        .0;
+        rows.push(rig_row(
+            "cragl cylinder (8 bends and poses)",
+            &cylinder,
+            steps,
+        )?);
         let [(horse, _), (face, _)] = real_rigs(dir)?;
         rows.push(rig_row("horse (10 poses)", &horse, steps)?);
         rows.push(rig_row(
@@ -115,7 +185,7 @@ pub fn run_continuity_bench(data_dir: Option<&Path>, steps: usize) -> anyhow::Re
             steps,
         )?);
     } else {
-        println!("continuity suite: the real rigs need --data DIR or MORPHKIT_DATA (sumner-horse-camel, ict-facekit)");
+        println!("continuity suite: the real rigs need --data DIR or MORPHKIT_DATA (cragl-bending-cylinder, sumner-horse-camel, ict-facekit)");
     }
     Ok(json!(rows))
 }

@@ -237,7 +237,10 @@ fn rig_row(
 /// seams welded as `morphkit blend`, the Python module and the add-on weld them: the rig a
 /// user's slider moves. (Until issue 54 the weld fused ICT's touching shells, 369 vertices,
 /// and welded eyeBlink_R's full solve snapped between 0.590 and 0.595; it welds none now.)
-fn read_rig(base: &Path, targets: &[std::path::PathBuf]) -> anyhow::Result<(ShapeSet, usize)> {
+pub(super) fn read_rig(
+    base: &Path,
+    targets: &[std::path::PathBuf],
+) -> anyhow::Result<(ShapeSet, usize)> {
     let b = read_mesh(base)?;
     let mut shapes = vec![("base".to_string(), b.positions.clone())];
     for t in targets {
