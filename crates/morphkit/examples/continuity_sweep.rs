@@ -13,10 +13,13 @@
 //! `bulges` (the compact-clip tests' tube with 4 bends and 12 bulges, which kinks; its clip's
 //! keys are its paths: `PATH_KEYS=A:B` sweeps the straight path from key A's weights to key B's in
 //! STEPS steps instead of one target, `KEYS=A:B` solves keys A to B themselves).
+//! `PATH_W="W;V"` (comma-separated weights of every target) sweeps the straight path from W
+//! to V, from FROM to TO of the way, on any rig.
 //! TARGET: a target's index from 0. `EIGHTHS=1` starts each frame of a single-target sweep
 //! from the predictor corrected by that target's equilibria at every eighth. `RAY=K` solves each frame by continuation along the ray
 //! from the rest shape (K steps, each started from the last equilibrium moved as the
-//! predictor moves) instead of the canonical fresh start. `PROFILE=1` prints every frame, `BOUND=0` every step's
+//! predictor moves) instead of the canonical fresh start; `STEPS_ALONG=K` does the same through
+//! the library ([`BlendOptions::continuation_steps`]). `PROFILE=1` prints every frame, `BOUND=0` every step's
 //! ratio, `DUMP=DIR` writes every frame's positions; `CONTINUE=1`, `STAGES=μ,…`, `TETHER`,
 //! `HINGE`, `GUARD` (the fold guard's weight), `HOLD_RAMP` and `NO_SAMPLED=1` try the variants docs/choices.md measured
 //! ("Continuity in the weights").
@@ -85,6 +88,12 @@ fn main() {
     if let Some(h) = std::env::var("HINGE").ok().and_then(|v| v.parse().ok()) {
         options.hinges.weight = h;
     }
+    if let Some(k) = std::env::var("STEPS_ALONG")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    {
+        options.continuation_steps = k;
+    }
     if let Some(g) = std::env::var("GUARD").ok().and_then(|v| v.parse().ok()) {
         options.fold_guard = g;
     }
@@ -148,6 +157,18 @@ fn main() {
                         .map(|(x, y)| x + t * (y - x))
                         .collect(),
                 )
+            })
+            .collect()
+    } else if let Ok(v) = std::env::var("PATH_W") {
+        // PATH_W="w1,w2,…;v1,v2,…": the straight path between two weight vectors.
+        let (a, b) = v.split_once(';').expect("FROM;TO");
+        let parse = |x: &str| -> Vec<f64> { x.split(',').map(|t| t.parse().unwrap()).collect() };
+        let (a, b) = (parse(a), parse(b));
+        let (from_t, to_t) = (from, to);
+        (0..=steps)
+            .map(|s| {
+                let t = from_t + (to_t - from_t) * s as f64 / steps as f64;
+                Weights::Delta(a.iter().zip(&b).map(|(x, y)| x + t * (y - x)).collect())
             })
             .collect()
     } else if let Ok(v) = std::env::var("KEYS") {

@@ -76,3 +76,63 @@ fn a_frame_with_no_equilibrium_near_its_start_stops_within_its_budget() {
     );
     assert!(r.positions.iter().flatten().all(|x| x.is_finite()));
 }
+
+/// Continuation along the ray (`BlendOptions::continuation_steps`): horse pose 7 swept by
+/// 1/400 from 0.6025 to 0.625 jumps once from the canonical start (5.7× the linear step at
+/// 0.6125 in the ten-pose rig, where the fresh start changes basin while the branch goes
+/// on: continuing frame by frame passes it at 1.14×); solved along the
+/// ray in 4 steps it moves continuously. Frames stay functions of their weights (the same
+/// bytes in reverse order), and one-hot weights still give the shape's own numbers.
+#[test]
+fn continuation_along_the_ray_keeps_horse_pose_7_on_its_branch() {
+    let Some(base) = common::data_file("sumner-horse-camel/horse-reference.obj.gz") else {
+        return common::skip("continuation_along_the_ray_keeps_horse_pose_7_on_its_branch");
+    };
+    let paths = vec![
+        base,
+        common::data_file("sumner-horse-camel/horse-07.obj.gz").unwrap(),
+    ];
+    let shapes = read_shape_set(&paths).unwrap();
+    let weights: Vec<Weights> = (0..=9)
+        .map(|k| Weights::Delta(vec![0.6025 + 0.0025 * k as f64]))
+        .collect();
+    let sweep = |steps: usize, order: &[usize]| {
+        let options = BlendOptions {
+            continuation_steps: steps,
+            ..Default::default()
+        };
+        let mut solver = PhysicalBlend::new(&shapes, &options).unwrap();
+        let mut frames = vec![Vec::new(); weights.len()];
+        for &k in order {
+            let r = solver.solve(&weights[k]).unwrap();
+            assert!(r.stats.converged, "{steps} steps, frame {k}");
+            frames[k] = r.positions;
+        }
+        let one_hot = solver.solve(&Weights::Delta(vec![1.0])).unwrap();
+        assert_eq!(
+            one_hot.positions,
+            shapes.positions(1),
+            "{steps} steps at the target"
+        );
+        let mut check = ContinuityCheck::new(4.0, bbox_diagonal(shapes.positions(0)));
+        for (x, w) in frames.iter().zip(&weights) {
+            check.push(x, &linear_blend(&shapes, w).unwrap()).unwrap();
+        }
+        (check.finish(), frames)
+    };
+    let forward: Vec<usize> = (0..weights.len()).collect();
+    let (fresh, _) = sweep(0, &forward);
+    let (along, frames) = sweep(4, &forward);
+    eprintln!(
+        "horse pose 7, 0.6025..0.625: canonical start {} jumps ({:.2}×), along the ray {} ({:.2}×)",
+        fresh.jumps.len(),
+        fresh.worst_ratio,
+        along.jumps.len(),
+        along.worst_ratio
+    );
+    assert!(along.jumps.is_empty(), "{:?}", along.jumps);
+    assert!(along.worst_ratio < fresh.worst_ratio);
+    let reverse: Vec<usize> = forward.iter().rev().copied().collect();
+    let (_, again) = sweep(4, &reverse);
+    assert_eq!(again, frames, "frames depend on their weights alone");
+}

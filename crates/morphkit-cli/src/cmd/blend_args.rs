@@ -150,6 +150,12 @@ pub struct BlendArgs {
     /// where both starts reach the same equilibrium.
     #[arg(long)]
     pub no_sampled_start: bool,
+    /// Solve each frame by continuation along its weights' ray from the rest shape in K steps
+    /// (each from the last equilibrium), so that a part that could settle either way keeps
+    /// the branch the motion starts on. About K times the work per frame; 0 (the default) or
+    /// 1: one solve from the canonical start. Frames stay functions of their weights.
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=64))]
+    pub continuation: u64,
     /// Factorize every frame's own Hessians instead of preconditioning frames near a
     /// target's equilibria at α = 0, ¼, ½, ¾, 1 with those equilibria's factors, turned by
     /// each vertex's rotation (on by default where a probe frame at α = ⅜ converges on them;
@@ -257,6 +263,7 @@ pub(super) fn blend_options(a: &BlendArgs, fixed: FixedVertices, frames: usize) 
         refactor_every: a.refactor_every,
         keep_factor_cg: a.keep_factor_cg,
         sampled_start: !a.no_sampled_start,
+        continuation_steps: a.continuation as usize,
         // References cost a probe solve and five factorizations per target, which only a
         // sequence pays back: a one-frame blend of a 40k-vertex sheet took 25 s with them and
         // 1.7 s without (docs/performance.md, "Film scale").

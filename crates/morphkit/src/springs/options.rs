@@ -33,6 +33,14 @@ pub struct BlendOptions {
     /// interactive snapshots run to convergence). `0`: no limit. Default `300`. Both rules are counts over
     /// the iterates, never times, so a frame stays a function of its weights.
     pub max_factorizations: usize,
+    /// Solves a frame by continuation along the ray from the rest shape (issue 54): `K > 1`
+    /// solves at the weights `(j/K) w`, `j = 1 … K`, the first from the canonical start, each
+    /// next one from the last equilibrium moved as the predictor moves, so that a frame keeps
+    /// the branch its ray starts on where two equilibria are near (a fresh start can land in
+    /// either). One-hot weights keep their shape's own numbers. `0` or `1`: one solve from the
+    /// canonical start (the default). At most 64. About K times the work; docs/choices.md,
+    /// "Continuity in the weights", has the measurements.
+    pub continuation_steps: usize,
     /// Interpolated rest lengths are clamped below at this fraction of the spring's shortest
     /// length over the shapes (only extrapolated weights reach it; counted per frame), and
     /// stiffness $k_0/\bar r$ uses at least this fraction of its longest. Default `0.05`.
@@ -172,6 +180,13 @@ pub(crate) fn check_options(o: &BlendOptions) -> Result<(), BlendError> {
     if !(o.min_rest_fraction > 0.0 && o.min_rest_fraction < 1.0) {
         return bad("min_rest_fraction", "in (0, 1)", o.min_rest_fraction);
     }
+    if o.continuation_steps > 64 {
+        return bad(
+            "the continuation steps",
+            "at most 64",
+            o.continuation_steps as f64,
+        );
+    }
     if !(o.fold_guard.is_finite() && o.fold_guard >= 0.0) {
         return bad("the fold guard", "finite and non-negative", o.fold_guard);
     }
@@ -290,6 +305,7 @@ impl Default for BlendOptions {
             max_newton_iterations: 300,
             stall_iterations: 100,
             max_factorizations: 300,
+            continuation_steps: 0,
             min_rest_fraction: 0.05,
             kinematic_stretch: 10.0,
             hold_ramp: 0.05,
