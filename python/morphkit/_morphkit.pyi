@@ -108,6 +108,7 @@ class PhysicalBlend:
         gradient_tolerance: Optional[float] = None,
         max_newton_iterations: Optional[int] = None,  # >= 0
         sampled_start: bool = True,
+        continuation_steps: Optional[int] = None,  # 0–64; frames solved along their ray
         interior: Optional[str] = None,
         anchor: Optional[str] = None,
         weld: bool = True,  # split seam/hard-edge vertices are one vertex for the solve

@@ -157,7 +157,10 @@ impl PyPhysicalBlend {
     /// 300), `sampled_start` (default True: frames start
     /// from the predictor corrected by each target's equilibria at ¼, ½, ¾, solved once per
     /// target on first need; False saves those three solves when only a frame or two is
-    /// wanted): see the library's `BlendOptions`.
+    /// wanted), `continuation_steps` (an integer 0–64, default 0: a frame is solved along its
+    /// weights' ray from the rest shape in that many steps, keeping the branch the ray starts
+    /// on where a fresh start can land in either of two equilibria, at about that many times
+    /// the work): see the library's `BlendOptions`.
     /// `interior="lattice"` adds internal springs on a lattice inside each closed component
     /// (Sec. 3.1; `"lattice,2"` doubles its density, `"tetgen[,density]"` runs an external
     /// tetgen); `anchor="auto"` (or `"x,y,z[,size]"`) adds the rigid interior anchor
@@ -171,7 +174,8 @@ impl PyPhysicalBlend {
     #[new]
     #[pyo3(signature = (base, targets, faces, *, fixed=None, hinge_weight=None,
         tether=None, kinematic_stretch=None, thin_band_rings=None, gradient_tolerance=None,
-        max_newton_iterations=None, sampled_start=true, interior=None, anchor=None, weld=true))]
+        max_newton_iterations=None, sampled_start=true, continuation_steps=None, interior=None,
+        anchor=None, weld=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -186,6 +190,7 @@ impl PyPhysicalBlend {
         gradient_tolerance: Option<f64>,
         max_newton_iterations: Option<&Bound<'_, PyAny>>,
         sampled_start: bool,
+        continuation_steps: Option<&Bound<'_, PyAny>>,
         interior: Option<&str>,
         anchor: Option<&str>,
         weld: bool,
@@ -197,6 +202,8 @@ impl PyPhysicalBlend {
             Kind::Blend,
             0,
         )?;
+        let continuation_steps =
+            args::opt_count("continuation_steps", continuation_steps, Kind::Blend, 0)?;
         let input = shape_set(base, targets, faces)?;
         let (n, k) = (input.num_vertices(), input.len() - 1);
         let weld = shape_weld(&input, weld);
@@ -214,6 +221,7 @@ impl PyPhysicalBlend {
         let mut opts = BlendOptions {
             fixed,
             sampled_start,
+            continuation_steps: continuation_steps.unwrap_or(0),
             ..BlendOptions::default()
         };
         if let Some(w) = hinge_weight {

@@ -46,6 +46,28 @@ def test_function_of_the_weights_alone(rig):
         assert np.abs(x - y).max() <= 1e-12 * diag(V)
 
 
+def test_continuation_along_the_ray(rig):
+    # continuation_steps: each frame solved along its ray in K steps; on this tube (one
+    # equilibrium) the same frames as the canonical start to the tolerance, a function of the
+    # weights alone, the shape itself at weight 1, and more Newton work per frame.
+    V, B, F = rig
+    plain = morphkit.PhysicalBlend(V, [B], F)
+    along = morphkit.PhysicalBlend(V, [B], F, continuation_steps=4)
+    d = diag(V)
+    x = along.solve(0.6)
+    work = along.last_stats["newton_iterations"]
+    assert np.abs(x - plain.solve(0.6)).max() <= 1e-4 * d
+    assert work > plain.last_stats["newton_iterations"]
+    along.solve(0.3)
+    assert np.array_equal(along.solve(0.6), x)
+    assert np.array_equal(along.solve(1.0), B)
+    for bad in (65, -1):
+        with pytest.raises(ValueError):
+            morphkit.PhysicalBlend(V, [B], F, continuation_steps=bad)
+    with pytest.raises(TypeError):
+        morphkit.PhysicalBlend(V, [B], F, continuation_steps=2.5)
+
+
 def test_stats_and_summary(rig):
     V, B, F = rig
     b = morphkit.PhysicalBlend(V, [B], F)
