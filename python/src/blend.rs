@@ -400,6 +400,7 @@ impl PyPhysicalBlend {
     /// `threads` threads (the result does not depend on it); in the caller's (unwelded) layout.
     #[pyo3(signature = (*, inbetweens=7, pair_tolerance=1e-4, max_pairs=120, damping=0.0,
         pair_samples=None, threads=None))]
+    #[allow(clippy::too_many_arguments)]
     fn bake(
         &self,
         py: Python<'_>,
