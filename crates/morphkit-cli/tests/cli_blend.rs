@@ -224,6 +224,67 @@ fn factor_precision_changes_the_speed_not_the_answer() {
     assert!(e.contains("factor-precision"), "{e}");
 }
 
+/// `--continuation K` solves each frame along its ray in K steps: on the demo (one
+/// equilibrium) the same frame within the tolerance, with more Newton work in `--report`;
+/// more than 64 steps are refused.
+#[test]
+fn continuation_solves_along_the_ray() {
+    let d = tmp_dir("blend-continuation");
+    ok(&["demo", "--out", s(&d)]);
+    let (base, target) = (d.join("base.obj"), d.join("target.obj"));
+    let run = |k: &str, name: &str| {
+        let (out, report) = (
+            d.join(format!("{name}.obj")),
+            d.join(format!("{name}.json")),
+        );
+        ok(&blend_args(
+            &base,
+            &target,
+            &[
+                "--alpha",
+                "0.6",
+                "--continuation",
+                k,
+                "--out",
+                s(&out),
+                "--report",
+                s(&report),
+            ],
+        ));
+        let r: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        let newton = r["frames"][0]["solver"]["newton_iterations"]
+            .as_u64()
+            .unwrap();
+        (vertices(&out), newton)
+    };
+    let (plain, plain_newton) = run("0", "plain");
+    let (along, along_newton) = run("4", "along");
+    let diff = plain
+        .iter()
+        .zip(&along)
+        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    assert!(diff < 1e-4, "{diff}");
+    assert!(
+        along_newton > plain_newton,
+        "{along_newton} vs {plain_newton}"
+    );
+    let e = fails(&blend_args(
+        &base,
+        &target,
+        &[
+            "--alpha",
+            "0.6",
+            "--continuation",
+            "65",
+            "--out",
+            s(&d.join("x.obj")),
+        ],
+    ));
+    assert!(e.contains("continuation"), "{e}");
+}
+
 /// Runs `blend` on `base` → `target` with the `extra` arguments and `--thin-band-rings rings`,
 /// writing `out` and the report `report`; returns stderr and the report.
 fn blend_rings(
