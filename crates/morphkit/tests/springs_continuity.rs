@@ -14,6 +14,7 @@ mod tube;
 
 use morphkit::mesh::generate::turning_head_rig;
 use morphkit::mesh::{bbox_diagonal, ShapeSet};
+use morphkit::springs::snaps::is_snap;
 use morphkit::springs::{linear_blend, BlendOptions, ContinuityCheck, PhysicalBlend, Weights};
 
 /// Sweeps `weights` on `shapes`; returns the worst step ratio and the 99th percentile of the
@@ -137,6 +138,15 @@ fn a_kinking_tube_snaps_once_and_never_flickers() {
         );
         if snaps {
             assert!(jumps.len() <= 1, "{name}: jumps at steps {jumps:?}");
+            // And the step that jumps is a snap: halved, its move stays in one half.
+            if let Some(&k) = jumps.first() {
+                let w = ramp(16, &keys[a], &keys[a + 1], 200);
+                let mut solver = PhysicalBlend::new(&shapes, &BlendOptions::default()).unwrap();
+                assert!(
+                    is_snap(&mut solver, &w[k], &w[k + 1], worst).unwrap(),
+                    "{name}: step {k} is not a snap"
+                );
+            }
         } else {
             assert!(worst <= 4.0, "{name}: a step of {worst:.2}× the linear one");
         }

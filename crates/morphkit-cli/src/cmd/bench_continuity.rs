@@ -8,7 +8,7 @@
 //! *snap* (a discontinuity: the motion leaves one equilibrium for another) keeps its move in
 //! one half, whose ratio about doubles, while a *fast step* (the equilibrium moving smoothly
 //! faster than the bound allows) keeps its ratio; a pop counts as a snap when a half's ratio
-//! is over [`SNAP_GROWTH`] times the step's. Rigs: generated necks whose head turns 170–190°
+//! is over `SNAP_GROWTH` times the step's (`morphkit::springs::snaps`). Rigs: generated necks whose head turns 170–190°
 //! with a roll or bends back by 180°, and, with the data, cragl's cylinder with its eight
 //! bends and poses, the horse's ten poses and the ICT head's ten expressions, welded as
 //! `blend` welds them.
@@ -16,48 +16,12 @@
 use super::bench_scrub::real_rigs;
 use morphkit::mesh::generate::turning_head_rig;
 use morphkit::mesh::{bbox_diagonal, ShapeSet};
+use morphkit::springs::snaps::is_snap;
 use morphkit::springs::{
     linear_blend, BlendOptions, ContinuityCheck, PhysicalBlend, Weights, JUMP_BOUND,
 };
 use serde_json::{json, Value};
 use std::path::Path;
-
-/// A pop is a snap when halving its step leaves a half whose ratio is over this multiple of
-/// the step's (a discontinuity's move stays whole in one half, doubling its ratio; a smooth
-/// motion's ratio stays about the same).
-pub const SNAP_GROWTH: f64 = 1.5;
-
-/// The step ratio between the frames at `a` and `b`: the largest vertex move over the linear
-/// blend's largest move.
-fn step_ratio(
-    solver: &mut PhysicalBlend,
-    shapes: &ShapeSet,
-    a: &Weights,
-    b: &Weights,
-) -> anyhow::Result<f64> {
-    let (xa, xb) = (solver.solve(a)?.positions, solver.solve(b)?.positions);
-    let (la, lb) = (linear_blend(shapes, a)?, linear_blend(shapes, b)?);
-    let most = |p: &[morphkit::mesh::Point], q: &[morphkit::mesh::Point]| {
-        morphkit::geom::max_distance(p, q)
-    };
-    Ok(most(&xa, &xb) / most(&la, &lb).max(f64::MIN_POSITIVE))
-}
-
-/// Whether the pop between `a` and `b` (ratio `ratio`) is a snap: see [`SNAP_GROWTH`].
-fn is_snap(
-    solver: &mut PhysicalBlend,
-    shapes: &ShapeSet,
-    a: &Weights,
-    b: &Weights,
-    ratio: f64,
-) -> anyhow::Result<bool> {
-    let (Weights::Delta(x), Weights::Delta(y)) = (a, b) else {
-        return Ok(true);
-    };
-    let mid = Weights::Delta(x.iter().zip(y).map(|(p, q)| 0.5 * (p + q)).collect());
-    let halves = step_ratio(solver, shapes, a, &mid)?.max(step_ratio(solver, shapes, &mid, b)?);
-    Ok(halves > SNAP_GROWTH * ratio)
-}
 
 /// The weights of a path from `from` to `to` in `steps` steps.
 fn path(from: &[f64], to: &[f64], steps: usize) -> Vec<Weights> {
@@ -108,7 +72,7 @@ fn rig_row(name: &str, shapes: &ShapeSet, steps: usize) -> anyhow::Result<Value>
         worst = worst.max(c.worst_ratio);
         for j in &c.jumps {
             let [a, b] = j.frames;
-            if is_snap(&mut solver, shapes, &weights[a], &weights[b], j.ratio)? {
+            if is_snap(&mut solver, &weights[a], &weights[b], j.ratio)? {
                 let Weights::Delta(w) = &weights[a] else {
                     continue;
                 };

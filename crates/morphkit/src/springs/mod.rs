@@ -111,6 +111,7 @@ pub mod reference;
 mod rig;
 mod rotation_predictor;
 pub mod sampled_start;
+pub mod snaps;
 mod solve;
 mod spring_set;
 mod steihaug;
