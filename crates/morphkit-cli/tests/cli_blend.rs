@@ -376,3 +376,39 @@ fn a_jump_between_frames_is_reported_with_its_region() {
     assert!(r["jump_region"].is_null());
     assert!(!ply.exists());
 }
+
+/// `blend` tells its jumps apart (issue 54): on cragl's cylinder, pose1-3 snaps near 0.57
+/// (the equilibrium the frames were on ends; halving the step keeps the move in one half),
+/// while pose1-4 only moves smoothly faster than the bound (up to 5× the linear step). The
+/// report lists the snaps, and the warning says which.
+#[test]
+fn blend_tells_a_snap_from_a_fast_step() {
+    let Some(data) = std::env::var_os("MORPHKIT_DATA") else {
+        eprintln!("SKIPPED: MORPHKIT_DATA is not set");
+        return;
+    };
+    let cyl = std::path::Path::new(&data).join("cragl-bending-cylinder");
+    let d = tmp_dir("blend-snaps");
+    let base = cyl.join("cylinder-rest.obj");
+    for (target, snaps) in [("pose1-3", true), ("pose1-4", false)] {
+        let t = cyl.join(format!("cylinder-{target}.obj"));
+        assert!(base.exists() && t.exists(), "{} is missing", t.display());
+        let (out, report) = (d.join(target), d.join(format!("{target}.json")));
+        let (_, err) = run_ok(&blend_args(
+            &base,
+            &t,
+            &["--frames", "41", "--out", s(&out), "--report", s(&report)],
+        ));
+        let r: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        let jumps = r["continuity"]["jumps"].as_array().unwrap().len();
+        let found = r["snaps"].as_array().unwrap().len();
+        assert!(jumps >= 1, "{target}: {}", r["continuity"]);
+        if snaps {
+            assert!(found >= 1 && err.contains("a snap"), "{target}: {} {err}", r["snaps"]);
+        } else {
+            assert!(found == 0 && err.contains("none of them snaps"), "{target}: {err}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

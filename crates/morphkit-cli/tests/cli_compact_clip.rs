@@ -273,6 +273,19 @@ fn a_long_clip_of_many_targets_stays_small_from_a_packed_input() {
     let clip = report_clip(&report);
     let k = clip["corrective_targets"].as_u64().unwrap();
     assert!(k >= 1, "{clip}");
+    // The tube kinks twice in this clip (tests/springs_continuity.rs): both jumps are snaps.
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let jumps: Vec<&serde_json::Value> = r["continuity"]["jumps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| &j["frames"])
+        .collect();
+    assert_eq!(jumps.len(), 2, "{}", r["continuity"]);
+    assert_eq!(
+        r["snaps"].as_array().unwrap().iter().collect::<Vec<_>>(),
+        jumps
+    );
     let (size_in, size_out) = (
         std::fs::metadata(&input).unwrap().len(),
         std::fs::metadata(&out).unwrap().len(),

@@ -63,6 +63,7 @@ pub(super) fn report_jumps(
     out: &Path,
     base: &morphkit::mesh::TriMesh,
     continuity: &Continuity,
+    snaps: Option<&[[usize; 2]]>,
 ) -> anyhow::Result<Option<PathBuf>> {
     let Some(first) = continuity.jumps.first() else {
         return Ok(None);
@@ -74,8 +75,25 @@ pub(super) fn report_jumps(
         .unwrap_or(first);
     let region = continuity.jump_vertices();
     let path = jumps_path(out);
+    // Snaps (the frames' equilibrium ends: the physics snaps) and fast steps (a smooth motion
+    // faster than the bound), where they were told apart (`morphkit::springs::snaps`).
+    let two =
+        "the spring energy has two equilibria there and the frames pass from one to the other";
+    let why = match snaps {
+        None => format!("{two}."),
+        Some([]) => "none of them snaps: the equilibrium moves smoothly there, faster than the bound (halving a step keeps its ratio).".to_string(),
+        Some(s) if s.len() == continuity.jumps.len() => {
+            format!("{two} (each a snap: halving the step keeps the move in one half).")
+        }
+        Some(s) => format!(
+            "{} of them snap ({two}; first at frames {}→{}), the others are fast steps (the equilibrium moves smoothly, faster than the bound).",
+            s.len(),
+            s[0][0],
+            s[0][1]
+        ),
+    };
     outputs.warn_after_commit(format!(
-        "warning: a part jumped between {} pair(s) of consecutive frames (first: frames {}→{}; worst: frames {}→{}, {} vertices moving up to {:.1}× the linear blend's step, bound {}); the spring energy has two equilibria there and the frames pass from one to the other. {} vertices shown red in {}; try --hinge-weight 1 (see the README, \"Jumps between frames\")",
+        "warning: a part jumped between {} pair(s) of consecutive frames (first: frames {}→{}; worst: frames {}→{}, {} vertices moving up to {:.1}× the linear blend's step, bound {}); {why} {} vertices shown red in {}; try --hinge-weight 1 (see the README, \"Jumps between frames\")",
         continuity.jumps.len(),
         first.frames[0],
         first.frames[1],

@@ -20,6 +20,7 @@ use crate::outputs::Outputs;
 use crate::util::progress;
 use anyhow::{bail, Context};
 use morphkit::mesh::{Point, Topology};
+use morphkit::springs::snaps::is_snap;
 use morphkit::springs::{
     blend_metrics, fold_metrics, linear_blend, BlendResult, Continuity, ContinuityCheck,
     PhysicalBlend, Weights, JUMP_BOUND,
@@ -57,7 +58,13 @@ pub(super) struct Solved {
     clamped: Vec<(usize, usize)>,
     /// Jumps between consecutive frames, against the linear blend's steps.
     continuity: Continuity,
+    /// The jumps (their frames) that are snaps (`morphkit::springs::snaps`: halving the step
+    /// keeps the move in one half), among the first [`CLASSIFIED_JUMPS`] of a full solve.
+    snaps: Vec<[usize; 2]>,
 }
+
+/// Jumps of a sequence that are told apart as snaps or fast steps (three solves each).
+const CLASSIFIED_JUMPS: usize = 32;
 
 /// The side regions [`Solved::warn`] wrote beside the output, for the report.
 pub(super) struct Regions {
@@ -167,13 +174,24 @@ impl Surface {
             }
         }
         bar.finish_and_clear();
+        let continuity = steps.finish();
+        let mut snaps = Vec::new();
+        if let Some(solver) = self.solver.as_mut().filter(|_| !a.interactive) {
+            for j in continuity.jumps.iter().take(CLASSIFIED_JUMPS) {
+                let [p, q] = j.frames;
+                if is_snap(solver, &weights[p], &weights[q], j.ratio)? {
+                    snaps.push(j.frames);
+                }
+            }
+        }
         Ok(Solved {
             rows,
             unconverged,
             uncertain,
             failed,
             clamped,
-            continuity: steps.finish(),
+            continuity,
+            snaps,
         })
     }
 
@@ -212,6 +230,9 @@ impl Surface {
             "interactive_uncertain_frames": solved.uncertain.iter().map(|u| u.0).collect::<Vec<_>>(),
             "unconverged_region": regions.failed_ply.as_ref().map(|p| p.display().to_string()),
             "continuity": (!a.linear).then_some(&solved.continuity),
+            // Which jumps are snaps (the frames' equilibrium ends there) rather than fast
+            // steps (a smooth motion over the bound), among the first CLASSIFIED_JUMPS.
+            "snaps": (!a.linear && !a.interactive).then_some(&solved.snaps),
             "jump_region": regions.jumps_ply.as_ref().map(|p| p.display().to_string()),
             "timings": { "setup_seconds": self.setup_seconds, "write_seconds": write_seconds, "total_seconds": input.start.elapsed().as_secs_f64() },
             // How a rig's physical clip was written (blend_rig_out.rs), when one was.
@@ -256,7 +277,8 @@ impl Solved {
                 if uncertain.len() > 10 { ", …" } else { "" },
             );
         }
-        let jumps_ply = report_jumps(outputs, &a.out, base, &self.continuity)?;
+        let snaps = (!a.interactive).then_some(self.snaps.as_slice());
+        let jumps_ply = report_jumps(outputs, &a.out, base, &self.continuity, snaps)?;
         if let Some(&(_, most)) = clamped.iter().max_by_key(|c| c.1) {
             eprintln!(
                 "warning: extreme weights clamped the rest lengths of up to {most} springs in {} of {} frames (first: frame {}); see --report",

@@ -123,7 +123,7 @@ pub(super) fn run(a: &BlendArgs, input: &Input, mut outputs: Outputs) -> anyhow:
         eprintln!("note: element inversion (Ma et al. Sec. 5): up to {worst_tets} interior tetrahedra and {worst_tris} surface triangles flipped against the linear blend in a frame (see --report)");
     }
     let continuity = steps.finish();
-    let jumps_ply = report_jumps(&mut outputs, &a.out, shapes.base(), &continuity)?;
+    let jumps_ply = report_jumps(&mut outputs, &a.out, shapes.base(), &continuity, None)?;
     let failed_ply = (!unconverged.is_empty()).then(|| unconverged_path(&a.out));
     if let Some(path) = &failed_ply {
         outputs.warn_after_commit(format!(
