@@ -405,9 +405,16 @@ fn blend_tells_a_snap_from_a_fast_step() {
         let found = r["snaps"].as_array().unwrap().len();
         assert!(jumps >= 1, "{target}: {}", r["continuity"]);
         if snaps {
-            assert!(found >= 1 && err.contains("a snap"), "{target}: {} {err}", r["snaps"]);
+            assert!(
+                found >= 1 && err.contains("a snap"),
+                "{target}: {} {err}",
+                r["snaps"]
+            );
         } else {
-            assert!(found == 0 && err.contains("none of them snaps"), "{target}: {err}");
+            assert!(
+                found == 0 && err.contains("none of them snaps"),
+                "{target}: {err}"
+            );
         }
     }
     let _ = std::fs::remove_dir_all(&d);

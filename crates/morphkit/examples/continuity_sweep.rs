@@ -9,20 +9,24 @@
 //!
 //! RIG: `horse` (ten poses), `ict` (ten expressions), `twist:DEG` (a generated neck whose head
 //! turns DEG° about the neck with a 20° roll), `buckle` (a thin sheet pushed together),
-//! `files:BASE,TARGET,…` (meshes under MORPHKIT_DATA, the first the base),
-//! `bulges` (the compact-clip tests' tube with 4 bends and 12 bulges, which kinks; its clip's
-//! keys are its paths: `PATH_KEYS=A:B` sweeps the straight path from key A's weights to key B's in
-//! STEPS steps instead of one target, `KEYS=A:B` solves keys A to B themselves).
-//! `PATH_W="W;V"` (comma-separated weights of every target) sweeps the straight path from W
-//! to V, from FROM to TO of the way, on any rig.
-//! TARGET: a target's index from 0. `EIGHTHS=1` starts each frame of a single-target sweep
-//! from the predictor corrected by that target's equilibria at every eighth. `RAY=K` solves each frame by continuation along the ray
-//! from the rest shape (K steps, each started from the last equilibrium moved as the
-//! predictor moves) instead of the canonical fresh start; `STEPS_ALONG=K` does the same through
-//! the library ([`BlendOptions::continuation_steps`]). `PROFILE=1` prints every frame, `BOUND=0` every step's
-//! ratio, `DUMP=DIR` writes every frame's positions; `CONTINUE=1`, `STAGES=μ,…`, `TETHER`,
-//! `HINGE`, `GUARD` (the fold guard's weight), `HOLD_RAMP` and `NO_SAMPLED=1` try the variants docs/choices.md measured
-//! ("Continuity in the weights").
+//! `files:BASE,TARGET,…` (meshes under MORPHKIT_DATA, the first the base), or `bulges` (the
+//! compact-clip tests' tube with 4 bends and 12 bulges, which kinks).
+//!
+//! What is swept: TARGET (an index from 0) alone from FROM to TO in STEPS steps, or
+//! - `PATH_W="W;V"` (comma-separated weights of every target): the straight path from W to V,
+//!   from FROM to TO of the way, on any rig;
+//! - on `bulges`, `PATH_KEYS=A:B`: the straight path from its clip's key A to key B in STEPS
+//!   steps, and `KEYS=A:B`: keys A to B themselves.
+//!
+//! How each frame is solved: the canonical start by default; `STEPS_ALONG=K` by continuation
+//! along the ray from the rest shape in K steps through the library
+//! ([`BlendOptions::continuation_steps`]), `RAY=K` the same written out here; `EIGHTHS=1` from
+//! the predictor corrected by the target's own equilibria at every eighth (a single-target
+//! sweep); `CONTINUE=1` from the previous frame moved as the predictor moves (path-dependent).
+//! `STAGES=μ,…`, `TETHER`, `HINGE`, `GUARD` (the fold guard's weight), `HOLD_RAMP` and
+//! `NO_SAMPLED=1` try the variants docs/choices.md measured ("Continuity in the weights").
+//! `PROFILE=1` prints every frame, `BOUND=0` every step's ratio, `DUMP=DIR` writes every
+//! frame's positions, `ONE="i:w,j:w"` solves one frame.
 
 #[path = "../tests/common/mod.rs"]
 mod common;

@@ -8,10 +8,10 @@
 //! *snap* (a discontinuity: the motion leaves one equilibrium for another) keeps its move in
 //! one half, whose ratio about doubles, while a *fast step* (the equilibrium moving smoothly
 //! faster than the bound allows) keeps its ratio; a pop counts as a snap when a half's ratio
-//! is over `SNAP_GROWTH` times the step's (`morphkit::springs::snaps`). Rigs: generated necks whose head turns 170–190°
-//! with a roll or bends back by 180°, and, with the data, cragl's cylinder with its eight
-//! bends and poses, the horse's ten poses and the ICT head's ten expressions, welded as
-//! `blend` welds them.
+//! is over `SNAP_GROWTH` times the step's (`morphkit::springs::snaps`). Rigs: generated
+//! necks whose head turns 170–190° with a roll or bends back by 180°, and, with the data,
+//! cragl's cylinder with its eight bends and poses, the horse's ten poses and the ICT head's
+//! ten expressions, welded as `blend` welds them.
 
 use super::bench_scrub::real_rigs;
 use morphkit::mesh::generate::turning_head_rig;
