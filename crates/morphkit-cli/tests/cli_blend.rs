@@ -260,11 +260,7 @@ fn continuation_solves_along_the_ray() {
     };
     let (plain, plain_newton) = run("0", "plain");
     let (along, along_newton) = run("4", "along");
-    let diff = plain
-        .iter()
-        .zip(&along)
-        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
-        .fold(0.0, f64::max);
+    let diff = morphkit::geom::max_distance(&plain, &along);
     assert!(diff < 1e-4, "{diff}");
     assert!(
         along_newton > plain_newton,

@@ -19,8 +19,8 @@
 //!   steps, and `KEYS=A:B`: keys A to B themselves.
 //!
 //! How each frame is solved: the canonical start by default; `STEPS_ALONG=K` by continuation
-//! along the ray from the rest shape in K steps through the library
-//! ([`BlendOptions::continuation_steps`]), `RAY=K` the same written out here; `EIGHTHS=1` from
+//! along the ray from the rest shape in K steps ([`BlendOptions::continuation_steps`]);
+//! `EIGHTHS=1` from
 //! the predictor corrected by the target's own equilibria at every eighth (a single-target
 //! sweep); `CONTINUE=1` from the previous frame moved as the predictor moves (path-dependent).
 //! `STAGES=μ,…`, `TETHER`, `HINGE`, `GUARD` (the fold guard's weight), `HOLD_RAMP` and
@@ -203,10 +203,7 @@ fn main() {
                 })
                 .collect()
         });
-    let ray: usize = std::env::var("RAY")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(0);
+
     let bound: f64 = std::env::var("BOUND")
         .ok()
         .and_then(|b| b.parse().ok())
@@ -240,7 +237,6 @@ fn main() {
                 r.stats.newton_iterations += extra;
                 r
             }
-            _ if ray > 0 => along_ray(&mut solver, w, ray),
             _ if eighths.is_some() => {
                 // EIGHTHS=1: the predictor corrected by the target's own equilibria at the
                 // eighths (solved first, canonically), interpolated linearly.
@@ -313,36 +309,4 @@ fn main() {
         secs.last().unwrap(),
         t0.elapsed().as_secs_f64()
     );
-}
-
-/// The equilibrium at `w` reached along the ray from the rest shape: `k` solves at `(j/k) w`,
-/// the first from the canonical start, each next one from the last equilibrium moved as the
-/// predictor moves; its statistics are the last solve's with every solve's Newton iterations.
-fn along_ray(solver: &mut PhysicalBlend, w: &Weights, k: usize) -> morphkit::springs::BlendResult {
-    let Weights::Delta(w) = w else {
-        panic!("delta weights")
-    };
-    let mut last: Option<(morphkit::springs::BlendResult, Vec<morphkit::mesh::Point>)> = None;
-    let mut iterations = 0;
-    for j in 1..=k {
-        let wj = Weights::Delta(w.iter().map(|v| v * j as f64 / k as f64).collect());
-        let q = solver.predict(&wj).unwrap();
-        let r = match &last {
-            None => solver.solve(&wj).unwrap(),
-            Some((r, p)) => {
-                let start: Vec<_> = r
-                    .positions
-                    .iter()
-                    .zip(p.iter().zip(&q))
-                    .map(|(x, (p, q))| std::array::from_fn(|i| x[i] + q[i] - p[i]))
-                    .collect();
-                solver.solve_with(&wj, &[], Some(&start)).unwrap()
-            }
-        };
-        iterations += r.stats.newton_iterations;
-        last = Some((r, q));
-    }
-    let mut r = last.expect("k > 0").0;
-    r.stats.newton_iterations = iterations;
-    r
 }

@@ -118,7 +118,7 @@ fn a_path_between_two_turns_sweeps_without_a_jump() {
 /// in one step and never flickers back, and on the paths next to them it moves continuously.
 /// (Continuation along the ray from the rest shape keeps the straight branch about one key
 /// longer and snaps then, with a run of 4–20× steps where that branch runs out, at 5–8× the
-/// Newton iterations: `examples/continuity_sweep.rs bulges`, `RAY=8`.)
+/// Newton iterations: `examples/continuity_sweep.rs bulges`, `STEPS_ALONG=8`.)
 #[test]
 fn a_kinking_tube_snaps_once_and_never_flickers() {
     let (p, tris) = fixture::tube(tube::NU, tube::NV, 1.0, 0.0);

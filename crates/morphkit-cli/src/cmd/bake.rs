@@ -139,7 +139,7 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
     let t_bake = Instant::now();
     let baked = bake(&mut solver, &options, threads)?.unweld(&weld, &welded);
     let bake_seconds = t_bake.elapsed().as_secs_f64();
-    let checked = check(&mut solver, &weld, &shapes, &baked, &check_rows)?;
+    let checked = check(&mut solver, &weld, &shapes, &baked, &check_rows, threads)?;
     if let (Some(path), false) = (&a.check_frames, checked.is_empty()) {
         let frames = ShapeSet::new(
             shapes.base().clone(),
@@ -243,24 +243,25 @@ fn check_rows(f: &std::path::Path, names: &[String]) -> anyhow::Result<Vec<Vec<f
     Ok(out)
 }
 
-/// Solves every row in full (on the welded rig, each copy then given its own position) and
-/// compares it with `baked`'s evaluation and the linear blend.
+/// Solves every row in full on up to `threads` threads (on the welded rig, each copy then
+/// given its own position) and compares it with `baked`'s evaluation and the linear blend.
 fn check(
     solver: &mut PhysicalBlend,
     weld: &Weld,
     shapes: &ShapeSet,
     baked: &morphkit::bake::BakedRig,
     rows: &[Vec<f64>],
+    threads: usize,
 ) -> anyhow::Result<Vec<Checked>> {
     let diag = morphkit::mesh::bbox_diagonal(shapes.positions(0)).max(f64::MIN_POSITIVE);
+    let weights: Vec<Weights> = rows.iter().map(|w| Weights::Delta(w.clone())).collect();
+    let solved = solver.solve_many(&weights, threads);
     let mut out = Vec::with_capacity(rows.len());
-    for w in rows {
-        let x = Weights::Delta(w.clone());
-        let r = solver.solve(&x)?;
-        let c = x.coefficients(shapes.len())?;
-        let solved = weld.scatter_frame(&r.positions, &c);
+    for ((w, x), r) in rows.iter().zip(&weights).zip(solved) {
+        let r = r?;
+        let solved = weld.scatter_frame(&r.positions, &x.coefficients(shapes.len())?);
         let played = baked.evaluate(w);
-        let linear = morphkit::springs::linear_blend(shapes, &x)?;
+        let linear = morphkit::springs::linear_blend(shapes, x)?;
         out.push(Checked {
             weights: w.clone(),
             bake_error: max_distance(&played, &solved) / diag,

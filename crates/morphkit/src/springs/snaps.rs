@@ -8,6 +8,7 @@
 
 use super::{linear_blend, BlendError, PhysicalBlend, Weights};
 use crate::geom::max_distance;
+use crate::mesh::Point;
 
 /// A step is a snap when one of its halves has a ratio over this multiple of the step's.
 pub const SNAP_GROWTH: f64 = 1.5;
@@ -15,11 +16,34 @@ pub const SNAP_GROWTH: f64 = 1.5;
 /// The step ratio between the canonical frames at `a` and `b`: the largest vertex move over
 /// the linear blend's largest move (`0/0` is 0).
 pub fn step_ratio(solver: &mut PhysicalBlend, a: &Weights, b: &Weights) -> Result<f64, BlendError> {
-    let (xa, xb) = (solver.solve(a)?.positions, solver.solve(b)?.positions);
-    let shapes = solver.shapes();
-    let linear = max_distance(&linear_blend(shapes, a)?, &linear_blend(shapes, b)?);
-    let moved = max_distance(&xa, &xb);
-    Ok(if linear > 0.0 { moved / linear } else { 0.0 })
+    let (fa, fb) = (Frame::of(solver, a)?, Frame::of(solver, b)?);
+    Ok(fa.ratio(&fb))
+}
+
+/// A canonical frame and the linear blend of the same weights.
+struct Frame {
+    solved: Vec<Point>,
+    linear: Vec<Point>,
+}
+
+impl Frame {
+    fn of(solver: &mut PhysicalBlend, w: &Weights) -> Result<Self, BlendError> {
+        let solved = solver.solve(w)?.positions;
+        Ok(Frame {
+            linear: linear_blend(solver.shapes(), w)?,
+            solved,
+        })
+    }
+
+    /// The step ratio from `self` to `next`.
+    fn ratio(&self, next: &Frame) -> f64 {
+        let linear = max_distance(&self.linear, &next.linear);
+        if linear > 0.0 {
+            max_distance(&self.solved, &next.solved) / linear
+        } else {
+            0.0
+        }
+    }
 }
 
 /// Whether the step from `a` to `b` (ratio `ratio`, as [`step_ratio`] or
@@ -49,8 +73,12 @@ pub fn is_snap(
             ))
         }
     };
-    let halves = step_ratio(solver, a, &m)?.max(step_ratio(solver, &m, b)?);
-    Ok(halves > SNAP_GROWTH * ratio)
+    let (fa, fm, fb) = (
+        Frame::of(solver, a)?,
+        Frame::of(solver, &m)?,
+        Frame::of(solver, b)?,
+    );
+    Ok(fa.ratio(&fm).max(fm.ratio(&fb)) > SNAP_GROWTH * ratio)
 }
 
 #[cfg(test)]
