@@ -31,7 +31,10 @@ cyl="$data/cragl-bending-cylinder"
 # A 2 100-frame blend of a 420-vertex tube: more morph targets than one WebGL2 mesh holds.
 "$bin" blend --base "$cyl/cylinder-rest.obj" --target "$cyl/cylinder-bend-4.obj" --frames 2100 \
   --linear --out "$out/tube2100" --force
+# Longer than --max-targets (200): a compact clip by default (one target at per-frame weights:
+# the linear blend is exact in it), and one target per frame split into 11 meshes on request.
 "$bin" convert "$out/tube2100" "$out/tube2100.glb"
+"$bin" convert "$out/tube2100" --per-frame-targets "$out/tube2100-split.glb"
 # A physical blend as OBJ frames, and the same frames as GLB.
 "$bin" blend --base "$cyl/cylinder-rest.obj" --target "$cyl/cylinder-bend-4.obj" --frames 24 \
   --out "$out/bend24" --force
@@ -41,8 +44,14 @@ cyl="$data/cragl-bending-cylinder"
 "$bin" convert "$out/horse-gallop" "$out/horse-gallop.glb"
 node "$here/check.mjs" --shots "$out/shots" \
   "$out/tube2100.glb" "$out/tube2100" \
+  "$out/tube2100-split.glb" "$out/tube2100" \
   "$out/bend24.glb" "$out/bend24" \
   "$out/horse-gallop.glb" "$out/horse-gallop" | tee "$out/results.jsonl"
+# The physical frames as a compact clip on request (--clip-tolerance): a few targets whose
+# fitted normal deltas shade each frame, every frame within the tolerance as played.
+"$bin" convert "$out/bend24" --clip-tolerance 1e-3 "$out/bend24-compact.glb"
+node "$here/check.mjs" --tol 1.001e-3 --shots "$out/shots" "$out/bend24-compact.glb" "$out/bend24" \
+  | tee -a "$out/results.jsonl"
 # The same 2 100 frames quantized (KHR_mesh_quantization, dequantized by the node transform) with
 # sparse morph targets: within the quantization error (2.7e-5 of the diagonal by construction).
 "$bin" convert "$out/tube2100" --quantize --sparse-targets "$out/tube2100-packed.glb"

@@ -22,8 +22,8 @@ use serde_json::json;
 use std::path::{Path, PathBuf};
 
 pub use crate::outputs_flags::{
-    asset_max_targets, check_asset_flags, check_compact_asset_flags, quantize_flag, set_context,
-    OutputFlags,
+    asset_max_targets, check_asset_flags, check_clip_flags, check_compact_asset_flags, clip_flags,
+    quantize_flag, set_context, OutputFlags,
 };
 use crate::outputs_flags::{context, refuse_asset_flags};
 
@@ -124,6 +124,8 @@ pub fn frames_options(opts: &FramesOptions, frames: usize) -> FramesOptions {
     o
 }
 
+#[path = "outputs_clip.rs"]
+mod clip;
 #[path = "outputs_plan.rs"]
 mod plan;
 pub use plan::{is_frame_dir, Kind, Plan};
@@ -135,6 +137,8 @@ pub struct Outputs {
     staging: Staging,
     /// Warnings that name a staged output, printed by [`Outputs::commit`].
     notes: Vec<String>,
+    /// The layout of each glTF frame animation staged ([`Outputs::clips`]).
+    clips: Vec<serde_json::Value>,
 }
 
 impl Outputs {
@@ -228,6 +232,67 @@ impl Outputs {
         Ok(())
     }
 
+    /// Stages `frames` as the compact clip `c` ([`clip::choose`]), its layout in the asset's
+    /// `extras.morphkit.clip`, and says how close to the frames it plays, measured on the
+    /// written file ([`clip::played_error`]).
+    fn compact_gltf(
+        &mut self,
+        path: &Path,
+        frames: &ShapeSet,
+        c: &io::CompactFrames,
+        opts: &mut FramesOptions,
+        tolerance: f64,
+    ) -> anyhow::Result<()> {
+        let diagonal = frames.base().bbox_diagonal();
+        let layout = json!({
+            "kind": "compact",
+            "targets": c.morphs.targets.len(),
+            "tolerance": tolerance,
+            "max_error": c.max_error / diagonal,
+        });
+        if let Some(e) = opts.gltf.extras.as_mut() {
+            e["morphkit"]["clip"] = layout.clone();
+        }
+        let mut summary = io::GltfSummary::default();
+        let mut played = (0.0, 0);
+        self.staging.write(path, false, |tmp| {
+            summary = io::write_compact_frames_with(tmp, c, &opts.gltf)?;
+            played = clip::played_error(tmp, frames)?;
+            Ok(())
+        })?;
+        report_gltf(path, &summary, &opts.gltf);
+        eprintln!(
+            "note: {}: {} frames written as a compact clip: {} morph target{} at per-frame \
+             weights, every frame within {:.2e} of the diagonal as played (--clip-tolerance \
+             {tolerance:.1e}; --per-frame-targets keeps one target per frame)",
+            path.display(),
+            frames.len(),
+            c.morphs.targets.len(),
+            if c.morphs.targets.len() == 1 { "" } else { "s" },
+            played.0
+        );
+        if played.0 > tolerance {
+            eprintln!(
+                "warning: {}: quantized, frame {} plays {:.2e} of the diagonal from its frame, \
+                 more than --clip-tolerance {tolerance:.1e}",
+                path.display(),
+                played.1,
+                played.0
+            );
+        }
+        let mut layout = layout;
+        layout["played_error"] = json!(played.0);
+        layout["worst_frame"] = json!(played.1);
+        self.clips.push(layout);
+        Ok(())
+    }
+
+    /// The layout of each glTF frame animation staged so far (`kind`: `compact` or
+    /// `per_frame_targets`, with the compact clip's targets and errors), for `--report`.
+    pub fn clips(&self) -> &[serde_json::Value] {
+        &self.clips
+    }
+
     /// Stages a user's glTF asset ([`io::GltfAsset`]) as one file, with the run's command line,
     /// sources and frame count in `asset.extras.morphkit` ([`frames_options`]).
     pub fn gltf_asset(
@@ -317,10 +382,22 @@ impl Outputs {
         opts: &FramesOptions,
         on_frame: impl FnMut(usize),
     ) -> anyhow::Result<()> {
-        let opts = frames_options(opts, frames.len());
+        let mut opts = frames_options(opts, frames.len());
         let dir = is_frame_dir(path);
         if !dir && matches!(Format::from_path(path), Some(Format::Glb | Format::Gltf)) {
-            return self.gltf_with(path, &io::frames_to_gltf(frames, opts.fps), &opts.gltf);
+            return match clip::choose(path, frames, &opts) {
+                clip::Layout::Compact(c, tolerance) => {
+                    self.compact_gltf(path, frames, &c, &mut opts, tolerance)
+                }
+                clip::Layout::PerFrame(note) => {
+                    if let Some(n) = note {
+                        eprintln!("{n}");
+                    }
+                    self.clips
+                        .push(json!({ "kind": "per_frame_targets", "targets": frames.len() - 1 }));
+                    self.gltf_with(path, &io::frames_to_gltf(frames, opts.fps), &opts.gltf)
+                }
+            };
         }
         Ok(self.staging.write(path, dir, |tmp| {
             io::write_frames_with(tmp, frames, &opts, on_frame)

@@ -31,6 +31,29 @@ pub struct OutputFlags {
     /// vertices that move (when that is smaller): for shapes that move part of the mesh.
     #[arg(long, global = true)]
     pub sparse_targets: bool,
+    /// A compact clip's largest vertex error in any frame, as a fraction of the base's
+    /// bounding-box diagonal (default 1e-3, `morphkit::clip::DEFAULT_TOLERANCE`). A compact
+    /// clip plays a few shapes at per-frame weights instead of one morph target per frame:
+    /// what `blend --rig X --out Y.glb` adds to the asset (the asset's own targets at the
+    /// clip's weights plus corrective targets), and how a .glb/.gltf animation of more frames
+    /// than --max-targets is written (given, also a shorter one).
+    #[arg(long, global = true, value_name = "FRACTION", value_parser = positive_fraction, conflicts_with = "per_frame_targets")]
+    pub clip_tolerance: Option<f64>,
+    /// One morph target per frame (each frame exact as f32) instead of a compact clip: in a
+    /// rig's asset (`blend --rig`) and in a .glb/.gltf animation of any length (a long one is
+    /// then split into meshes of at most --max-targets targets, shown in turn).
+    #[arg(long, global = true)]
+    pub per_frame_targets: bool,
+}
+
+/// A `--clip-tolerance`: a finite positive number.
+fn positive_fraction(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t.is_finite() && t > 0.0 => Ok(t),
+        _ => Err(format!(
+            "--clip-tolerance must be a finite positive fraction of the diagonal, not {s}"
+        )),
+    }
 }
 
 impl OutputFlags {
@@ -98,6 +121,38 @@ pub fn check_asset_flags(out: &Path) -> anyhow::Result<()> {
 /// corrective targets ([`io::CompactEncoding::quantize`]), the others are refused.
 pub fn check_compact_asset_flags(out: &Path) -> anyhow::Result<()> {
     refuse_asset_flags(out, true)
+}
+
+/// `--clip-tolerance` and `--per-frame-targets`: `(tolerance if given, per-frame)`.
+pub fn clip_flags() -> (Option<f64>, bool) {
+    let f = context().flags;
+    (f.clip_tolerance, f.per_frame_targets)
+}
+
+/// Refuses `--clip-tolerance` and `--per-frame-targets` for an output `out` they do nothing
+/// to: anything but a .glb/.gltf animation.
+pub fn check_clip_flags(out: &Path) -> anyhow::Result<()> {
+    let f = context().flags;
+    let gltf = matches!(
+        io::Format::from_path(out),
+        Some(io::Format::Glb | io::Format::Gltf)
+    );
+    for (flag, given) in [
+        ("--clip-tolerance", f.clip_tolerance.is_some()),
+        ("--per-frame-targets", f.per_frame_targets),
+    ] {
+        crate::util::only_with(
+            flag,
+            given,
+            "a .glb/.gltf output",
+            gltf,
+            &format!(
+                "it shapes the morph targets of a glTF animation; {} is not one",
+                out.display()
+            ),
+        )?;
+    }
+    Ok(())
 }
 
 /// Whether `--quantize` was given.

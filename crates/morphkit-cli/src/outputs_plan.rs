@@ -167,6 +167,7 @@ impl Plan {
         Ok(Outputs {
             staging,
             notes: Vec::new(),
+            clips: Vec::new(),
         })
     }
 

@@ -165,7 +165,7 @@ fn a_compact_clip_plays_the_solve_within_its_tolerance() {
         .concat(),
     );
     assert!(
-        e.contains("--clip-tolerance is used only with --rig"),
+        e.contains("--clip-tolerance is used only with a .glb/.gltf output"),
         "{e}"
     );
     let e = fails(

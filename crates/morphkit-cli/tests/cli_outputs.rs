@@ -106,7 +106,11 @@ fn blend_writes_usda_and_split_glb_with_names_extras_and_a_warning() {
     let text = std::fs::read_to_string(d.join("b.usda")).unwrap();
     assert_eq!(text.matches("point3f[] points").count(), 2);
     assert!(text.contains("endTimeCode = 11"));
-    let err = blend(&d.join("b.glb"), &["--max-targets", "4"]);
+    // One target per frame (shorter than a compact clip would be: cli_compact_frames.rs).
+    let err = blend(
+        &d.join("b.glb"),
+        &["--max-targets", "4", "--per-frame-targets"],
+    );
     assert!(
         err.contains("11 morph targets") && err.contains("4") && err.contains("4 meshes"),
         "{err}"

@@ -220,17 +220,6 @@ pub struct BlendArgs {
     /// file that is not such a cache (does not start with MKINTER) is refused, never replaced.
     #[arg(long, requires = "interactive")]
     pub interactive_cache: Option<PathBuf>,
-    /// With --rig and a .glb/.gltf --out: the compact clip's largest vertex error in any frame,
-    /// as a fraction of the base's bounding-box diagonal (default 1e-3,
-    /// `morphkit::clip::DEFAULT_TOLERANCE`). The clip plays the asset's own targets at its
-    /// weights plus as few corrective targets (with weight tracks) as bring every frame within
-    /// it.
-    #[arg(long, conflicts_with = "per_frame_targets")]
-    pub clip_tolerance: Option<f64>,
-    /// With --rig and a .glb/.gltf --out: one morph target per frame (each frame exact as f32,
-    /// one target per frame) instead of the compact clip.
-    #[arg(long)]
-    pub per_frame_targets: bool,
 }
 
 /// `--threads`, by default the machine's cores, clamped to 1..=64.

@@ -36,12 +36,14 @@ pub(super) fn run(a: &BlendArgs, input: Input, mut outputs: Outputs) -> anyhow::
     let solved = surface.solve(a, &input, |k, positions| frames.push(k, positions))?;
     let regions = solved.warn(&mut outputs, a, &input)?;
     let write_seconds = frames.write(&mut outputs, a, &input)?;
+    // How a .glb/.gltf animation was laid out (a compact clip or a target per frame).
+    let clip = outputs.clips().last().cloned();
     surface.report(
         &mut outputs,
         a,
         &input,
         (&solved, &regions),
-        (write_seconds, None),
+        (write_seconds, clip),
     )?;
     finish(outputs, a, &input)
 }

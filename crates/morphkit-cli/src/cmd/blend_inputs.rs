@@ -305,21 +305,5 @@ fn check_dependent_flags(a: &BlendArgs) -> anyhow::Result<()> {
         a.interactive,
         what,
     )?;
-    // The clip flags shape the physical animation added to the rig's asset.
-    let asset = rig && super::blend_rig::carries(&a.out);
-    let what = "they shape the physical clip added to the rig's asset, a .glb/.gltf --out";
-    for (flag, given) in [
-        ("--clip-tolerance", a.clip_tolerance.is_some()),
-        ("--per-frame-targets", a.per_frame_targets),
-    ] {
-        only_with(flag, given, "--rig and a .glb/.gltf --out", asset, what)?;
-    }
-    if let Some(t) = a.clip_tolerance {
-        if !(t.is_finite() && t > 0.0) {
-            anyhow::bail!(
-                "--clip-tolerance must be a finite positive fraction of the diagonal, not {t}"
-            );
-        }
-    }
-    Ok(())
+    crate::outputs::check_clip_flags(&a.out)
 }

@@ -115,13 +115,13 @@ pub(super) fn read(a: &BlendArgs, path: &Path) -> anyhow::Result<(Rig, ShapeSet)
         }
     };
     if carries(&a.out) {
-        if a.per_frame_targets {
+        if crate::outputs::clip_flags().1 {
             crate::outputs::check_asset_flags(&a.out)?;
         } else {
             crate::outputs::check_compact_asset_flags(&a.out)?;
         }
         asset.set_max_targets(crate::outputs::asset_max_targets());
-        if a.per_frame_targets {
+        if crate::outputs::clip_flags().1 {
             asset.check_frame_animation(&clip, &times, weights.len())?;
         } else {
             // The compact clip's correctives are counted once the residual is known.

@@ -90,13 +90,13 @@ pub(super) fn write(
     mut frames: RigFrames,
     inputs: &[PathBuf],
 ) -> anyhow::Result<Value> {
-    let summary = if frames.args.per_frame_targets {
+    let summary = if crate::outputs::clip_flags().1 {
         add_physical_clip(&mut frames)?
     } else {
         add_compact_clip(&mut frames)?
     };
     let rig = &frames.rig;
-    let compact = !frames.args.per_frame_targets;
+    let compact = !crate::outputs::clip_flags().1;
     let n = frames.positions.len();
     outputs.gltf_asset_with(&frames.args.out, &rig.asset, inputs, n, compact)?;
     let how = match summary["corrective_targets"].as_u64() {
@@ -136,9 +136,8 @@ fn add_physical_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
 /// found ([`morphkit::clip::residual_basis_on`]). The error reported is measured on what a
 /// viewer plays: the stored targets at the stored (f32) key weights.
 fn add_compact_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
-    let relative = frames
-        .args
-        .clip_tolerance
+    let relative = crate::outputs::clip_flags()
+        .0
         .unwrap_or(clip::DEFAULT_TOLERANCE);
     let diagonal = frames.shapes.base().bbox_diagonal();
     let n_targets = frames.shapes.len() - 1;

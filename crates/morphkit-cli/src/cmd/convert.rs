@@ -180,6 +180,7 @@ fn convert(args: &ConvertArgs) -> anyhow::Result<()> {
     } = expand(ins)?;
     protected.extend(args.reference.iter().cloned());
     check_fps(args.fps)?;
+    crate::outputs::check_clip_flags(&out)?;
     crate::util::announce_reading(&inputs);
     let frames_out = is_frames_output(&out);
     let out_fmt = Format::from_path(&out);

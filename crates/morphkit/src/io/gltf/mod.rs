@@ -53,6 +53,9 @@
 //!   (§3.11.2) shows it (scale 1) during its window and hides it (scale 0) otherwise; every node
 //!   but the first starts hidden. Such meshes carry `extras.morphkitTargets` (the original index
 //!   of each of their targets), from which [`read_gltf_morphs`] puts the rig back together.
+//! - **Or compact** ([`compact_frames`], [`write_compact_frames_with`]; the CLI's default for a
+//!   sequence longer than `--max-targets`): a few shapes spanning the frames' displacements and
+//!   one weight per shape and key, within a tolerance of every frame, in one mesh.
 //! - **Smaller, on request** ([`GltfOptions::quantize`], [`GltfOptions::sparse_targets`]; the
 //!   CLI's `--quantize` and `--sparse-targets`). Quantized: `KHR_mesh_quantization` (used and
 //!   required), positions and position deltas normalized `i16` with the dequantizing offset and
@@ -88,6 +91,7 @@ mod asset_write;
 mod budget;
 mod buffers;
 mod choose;
+mod compact_frames;
 mod extensions;
 mod normals;
 mod precheck;
@@ -100,6 +104,7 @@ mod write_vertices;
 
 pub use asset::{GltfAsset, GltfAssetOptions, GltfWeightAnimation};
 pub use asset_pack::CompactEncoding;
+pub use compact_frames::{compact_frames, write_compact_frames_with, CompactFrames};
 pub use read::{
     parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs, read_gltf_morphs_with,
     GltfReadOptions,

@@ -257,6 +257,16 @@ pub(super) fn build_with(
     m: &GltfMorphs,
     opts: &GltfOptions,
 ) -> Result<(Value, Builder, GltfSummary), IoError> {
+    build_with_normals(path, m, opts, None)
+}
+
+/// [`build_with`], the targets' normal deltas given (see [`write_vertices::write`]).
+pub(super) fn build_with_normals(
+    path: &Path,
+    m: &GltfMorphs,
+    opts: &GltfOptions,
+    normal_deltas: Option<&[Vec<Point>]>,
+) -> Result<(Value, Builder, GltfSummary), IoError> {
     check(path, m)?;
     let mut summary = GltfSummary {
         targets: m.targets.len(),
@@ -264,7 +274,7 @@ pub(super) fn build_with(
     };
     let mut b = Builder::default();
     // Accessor order: POSITION 0, indices 1, NORMAL 2, then the targets.
-    let vertices = write_vertices::write(path, m, opts, &mut b)?;
+    let vertices = write_vertices::write(path, m, opts, &mut b, normal_deltas)?;
     summary.float_position_targets = vertices.float_positions;
     summary.float_normal_targets = vertices.float_normals;
     let (pos, indices, normal, targets) = (

@@ -277,9 +277,10 @@ fn normals_i8(n: &[Point]) -> Vec<[i8; 3]> {
         .collect()
 }
 
-/// Normal deltas of a target with unit normals `n` over quantized base normals `qb`: `i8`
-/// when every component fits, else `f32`.
-fn normal_deltas_quantized(n: &[Point], qb: &[[i8; 3]]) -> Stream {
+/// Normal deltas of a target with normals `n` (unit vectors when `unit`, renormalised after
+/// rounding to `f32`) over quantized base normals `qb`: `i8` when every component fits, else
+/// `f32`.
+fn normal_deltas_quantized(n: &[Point], qb: &[[i8; 3]], unit: bool) -> Stream {
     let qt = normals_i8(n);
     let d: Vec<[i16; 3]> = qt
         .iter()
@@ -289,9 +290,13 @@ fn normal_deltas_quantized(n: &[Point], qb: &[[i8; 3]]) -> Stream {
     if d.iter().flatten().all(|&x| (x as f64).abs() <= K8) {
         return Stream::I8(d.iter().map(|q| q.map(|x| x as i8)).collect());
     }
-    Stream::F32(
+    let n32: Vec<[f32; 3]> = if unit {
         to_f32_unit(n)
-            .iter()
+    } else {
+        n.iter().map(|q| q.map(|x| x as f32)).collect()
+    };
+    Stream::F32(
+        n32.iter()
             .zip(qb)
             .map(|(a, b)| [0, 1, 2].map(|k| a[k] - (b[k] as f64 / K8) as f32))
             .collect(),
@@ -300,11 +305,15 @@ fn normal_deltas_quantized(n: &[Point], qb: &[[i8; 3]]) -> Stream {
 
 /// Writes the base's `POSITION`, indices, `NORMAL` and every target's deltas (in that
 /// accessor order) into `b`, as `opts` asks (see the [module documentation](self)).
+/// `normal_deltas`: each target's normal deltas as given (`#targets × #V`, not unit vectors:
+/// a compact clip's fitted deltas, [`super::compact_frames`]) instead of those of the
+/// target's own vertex normals.
 pub(super) fn write(
     path: &Path,
     m: &GltfMorphs,
     opts: &GltfOptions,
     b: &mut Builder,
+    normal_deltas: Option<&[Vec<Point>]>,
 ) -> Result<Vertices, IoError> {
     crate::io::atomic::check_fits_f32(path, "base", &m.base.positions)?;
     let base = to_f32(path, "base", &m.base.positions, None)?;
@@ -352,7 +361,7 @@ pub(super) fn write(
     let pos_eps = SPARSE_EPS * diag / unit;
     let mut targets = Vec::with_capacity(m.targets.len());
     let (mut float_positions, mut float_normals) = (0, 0);
-    for tp in &m.targets {
+    for (t, tp) in m.targets.iter().enumerate() {
         let dp = match (&dq, &qbase) {
             (Some(d), Some(qb)) => {
                 let qd: Vec<[i64; 3]> = tp
@@ -389,10 +398,20 @@ pub(super) fn write(
         }
         let mut target = json!({"POSITION": b.stream(&dp, true, sparse(pos_eps))});
         if let Some(n0) = &base_normals {
-            let n = vertex_normals(tp, &m.base.triangles);
-            let dn = match &qnormals {
-                Some(qb) => normal_deltas_quantized(&n, qb),
-                None => Stream::F32(
+            let given = normal_deltas.and_then(|d| d.get(t));
+            let n = match given {
+                // Base normals plus the given deltas (not unit: what the viewer adds).
+                Some(d) => n0
+                    .iter()
+                    .zip(d)
+                    .map(|(a, e)| [a[0] + e[0], a[1] + e[1], a[2] + e[2]])
+                    .collect(),
+                None => vertex_normals(tp, &m.base.triangles),
+            };
+            let dn = match (&qnormals, given) {
+                (Some(qb), _) => normal_deltas_quantized(&n, qb, given.is_none()),
+                (None, Some(d)) => Stream::F32(d.iter().map(|e| e.map(|x| x as f32)).collect()),
+                (None, None) => Stream::F32(
                     to_f32_unit(&n)
                         .iter()
                         .zip(to_f32_unit(n0))
