@@ -232,7 +232,7 @@ impl Outputs {
         Ok(())
     }
 
-    /// Stages `frames` as the compact clip `c` ([`clip::choose`]), its layout in the asset's
+    /// Stages `frames` as the compact clip `c` ([`io::choose_layout`]), its layout in the asset's
     /// `extras.morphkit.clip`, and says how close to the frames it plays, measured on the
     /// written file ([`clip::played_error`]).
     fn compact_gltf(
@@ -385,13 +385,13 @@ impl Outputs {
         let mut opts = frames_options(opts, frames.len());
         let dir = is_frame_dir(path);
         if !dir && matches!(Format::from_path(path), Some(Format::Glb | Format::Gltf)) {
-            return match clip::choose(path, frames, &opts) {
-                clip::Layout::Compact(c, tolerance) => {
+            return match io::choose_layout(frames, opts.fps, &opts.gltf) {
+                io::Layout::Compact(c, tolerance) => {
                     self.compact_gltf(path, frames, &c, &mut opts, tolerance)
                 }
-                clip::Layout::PerFrame(note) => {
+                io::Layout::PerFrame(note) => {
                     if let Some(n) = note {
-                        eprintln!("{n}");
+                        eprintln!("note: {}: {n}", path.display());
                     }
                     self.clips
                         .push(json!({ "kind": "per_frame_targets", "targets": frames.len() - 1 }));

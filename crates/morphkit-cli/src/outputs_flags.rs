@@ -67,6 +67,11 @@ impl OutputFlags {
         }
         opts.quantize |= self.quantize;
         opts.sparse_targets |= self.sparse_targets;
+        if self.per_frame_targets {
+            opts.layout = io::FrameLayout::PerFrame;
+        } else if let Some(t) = self.clip_tolerance {
+            opts.layout = io::FrameLayout::Compact(t);
+        }
     }
 }
 

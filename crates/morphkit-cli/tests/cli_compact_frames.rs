@@ -13,7 +13,7 @@ use morphkit::mesh::{generate, Point, ShapeSet};
 use std::path::Path;
 
 /// `n` OBJ frames in `dir`: a tube bending back and forth while it swells at its own pace.
-fn write_sequence(dir: &Path, n: usize) -> ShapeSet {
+fn write_sequence(dir: &Path, n: usize) {
     let tube = generate::tube(0.3, 4.0, 12, 24, false);
     let shapes: Vec<(String, Vec<Point>)> = (0..n)
         .map(|i| {
@@ -29,7 +29,6 @@ fn write_sequence(dir: &Path, n: usize) -> ShapeSet {
         .collect();
     let set = ShapeSet::new(tube, shapes).unwrap();
     morphkit::io::write_frames(dir, &set, &Default::default()).unwrap();
-    set
 }
 
 /// The largest distance, relative to frame 0's diagonal, between the frames `path` plays at its
@@ -48,7 +47,7 @@ fn played_error(path: &Path, frames: &ShapeSet) -> f64 {
 fn a_sequence_longer_than_max_targets_is_written_as_a_compact_clip() {
     let d = tmp_dir("compact-frames");
     let seq = d.join("seq");
-    let frames = write_sequence(&seq, 60);
+    write_sequence(&seq, 60);
     // Read back as the CLI reads it (OBJ rounds to f32).
     let frames = read_animation(&seq, None).unwrap();
     let compact = d.join("compact.glb");

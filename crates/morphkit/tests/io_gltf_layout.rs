@@ -59,10 +59,12 @@ fn vec3(doc: &Value, bin: &[u8], acc: usize) -> Vec<[f32; 3]> {
         .collect()
 }
 
+/// One target per frame (a compact clip is `compact_frames.rs`'s and `cli_compact_frames.rs`'s).
 fn opts(max_targets: usize) -> FramesOptions {
     FramesOptions {
         gltf: GltfOptions {
             max_targets,
+            layout: io::FrameLayout::PerFrame,
             ..GltfOptions::default()
         },
         ..FramesOptions::default()

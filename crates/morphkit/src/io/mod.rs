@@ -43,11 +43,11 @@ pub use format::Format;
 pub use frame_stream::FrameStream;
 pub use gltf::is_valid_target_name;
 pub use gltf::{
-    compact_frames, parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs,
+    choose_layout, compact_frames, parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs,
     read_gltf_morphs_with, write_compact_frames_with, write_gltf_morphs, write_gltf_scene,
-    write_gltf_scene_with, write_gltf_with, CompactEncoding, CompactFrames, GltfAsset,
+    write_gltf_scene_with, write_gltf_with, CompactEncoding, CompactFrames, FrameLayout, GltfAsset,
     GltfAssetOptions, GltfMorphs, GltfOptions, GltfReadOptions, GltfRigidMesh, GltfSummary,
-    GltfWeightAnimation, SAFE_MORPH_TARGETS,
+    GltfWeightAnimation, Layout, SAFE_MORPH_TARGETS,
 };
 pub use obj_template::ObjTemplate;
 pub use ply::{write_ply_colored, PlyEncoding};

@@ -3,7 +3,10 @@
 
 use super::atomic::temp_sibling;
 use super::format::Format;
-use super::gltf::{read_gltf_morphs, write_gltf_with, GltfMorphs, GltfOptions};
+use super::gltf::{
+    choose_layout, read_gltf_morphs, write_compact_frames_with, write_gltf_with, GltfMorphs,
+    GltfOptions, Layout,
+};
 use super::pc2::{parse_pc2, write_pc2, PointCache};
 use super::staging::commit_dir;
 use super::temporaries;
@@ -284,8 +287,9 @@ pub fn write_frames(out: &Path, frames: &ShapeSet, opts: &FramesOptions) -> Resu
 ///   by an earlier, longer sequence are then removed. Other files in `out` are never touched.
 ///   A failure while writing removes only the temporary directory: no file that existed before
 ///   the call is changed or deleted;
-/// - `.glb` / `.gltf`: [`frames_to_gltf`] at `opts.fps`, written with `opts.gltf`
-///   ([`write_gltf_with`]);
+/// - `.glb` / `.gltf`: laid out as `opts.gltf.layout` chooses ([`choose_layout`]): one target
+///   per frame ([`frames_to_gltf`] at `opts.fps`, written with [`write_gltf_with`]) or a
+///   compact clip ([`write_compact_frames_with`]), with `opts.gltf`;
 /// - `.pc2`: one sample per shape, start frame 0, one frame per sample;
 /// - `.usda`: [`write_usd_animation`] at `opts.fps` with `opts.usd`.
 ///
@@ -312,9 +316,12 @@ pub fn write_frames_with(
         return write_frame_dir(out, frames, template, &mut on_frame);
     }
     match Format::from_path(out) {
-        Some(Format::Glb | Format::Gltf) => {
-            write_gltf_with(out, &frames_to_gltf(frames, opts.fps), &opts.gltf).map(|_| ())
-        }
+        Some(Format::Glb | Format::Gltf) => match choose_layout(frames, opts.fps, &opts.gltf) {
+            Layout::Compact(c, _) => write_compact_frames_with(out, &c, &opts.gltf).map(|_| ()),
+            Layout::PerFrame(_) => {
+                write_gltf_with(out, &frames_to_gltf(frames, opts.fps), &opts.gltf).map(|_| ())
+            }
+        },
         Some(Format::Usda) => write_usd_animation(
             out,
             frames.base(),

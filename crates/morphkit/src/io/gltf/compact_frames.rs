@@ -25,6 +25,70 @@ use crate::mesh::{Point, ShapeSet};
 use nalgebra::DMatrix;
 use std::path::Path;
 
+/// How a glTF animation of a frame sequence is laid out ([`GltfOptions::layout`],
+/// [`choose_layout`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum FrameLayout {
+    /// A compact clip within [`crate::clip::DEFAULT_TOLERANCE`] of the diagonal when the
+    /// sequence has more frames than [`GltfOptions::max_targets`] (nonzero), which one target
+    /// per frame would split into meshes shown in turn; otherwise one target per frame.
+    #[default]
+    Auto,
+    /// One morph target per frame, each frame exact as `f32`.
+    PerFrame,
+    /// A compact clip within this fraction of the diagonal, whatever the length.
+    Compact(f64),
+}
+
+/// What [`choose_layout`] chose.
+#[derive(Clone, Debug)]
+pub enum Layout {
+    /// One morph target per frame, and why, where a compact clip was asked for or due and
+    /// could not be made within the tolerance and the target budget.
+    PerFrame(Option<String>),
+    /// A compact clip, and its tolerance as a fraction of frame 0's bounding-box diagonal.
+    Compact(Box<CompactFrames>, f64),
+}
+
+/// The layout of `frames` as a glTF animation at `fps` written with `opts`
+/// ([`GltfOptions::layout`]). A compact clip has at most `max_targets` shapes (when nonzero)
+/// and fewer than the frames' own targets, else the frames keep one target each. Quantized
+/// ([`GltfOptions::quantize`]), the writer rounds each shape again (at most 2.7e-5 of the
+/// diagonal a coordinate), so the basis is taken within three quarters of the tolerance.
+pub fn choose_layout(frames: &ShapeSet, fps: f64, opts: &GltfOptions) -> Layout {
+    let max = opts.max_targets;
+    let relative = match opts.layout {
+        FrameLayout::PerFrame => return Layout::PerFrame(None),
+        FrameLayout::Compact(t) => t,
+        FrameLayout::Auto if max != 0 && frames.len().saturating_sub(1) > max => {
+            crate::clip::DEFAULT_TOLERANCE
+        }
+        FrameLayout::Auto => return Layout::PerFrame(None),
+    };
+    let diagonal = frames.base().bbox_diagonal();
+    if !(diagonal > 0.0 && diagonal.is_finite()) || frames.len() < 3 {
+        return Layout::PerFrame(None);
+    }
+    let mut most = frames.len() - 2;
+    if max != 0 {
+        most = most.min(max);
+    }
+    let share = if opts.quantize { 0.75 } else { 1.0 };
+    match compact_frames(frames, fps, relative * diagonal * share, most) {
+        Ok(c) if c.morphs.targets.is_empty() => Layout::PerFrame(None),
+        Ok(c) => Layout::Compact(Box::new(c), relative),
+        Err(ClipError::TooManyShapes { error, .. }) => Layout::PerFrame(Some(format!(
+            "a compact clip within {relative:.1e} of the diagonal would need more than {most} \
+             morph targets (with {most}, a frame stays {:.2e} off); written with one target \
+             per frame",
+            error / diagonal
+        ))),
+        Err(e) => Layout::PerFrame(Some(format!(
+            "no compact clip ({e}); written with one target per frame"
+        ))),
+    }
+}
+
 /// A frame sequence as `K` shapes and their per-frame coefficients ([`compact_frames`]).
 #[derive(Clone, Debug)]
 pub struct CompactFrames {
@@ -265,6 +329,38 @@ mod tests {
         let again = compact_frames(&frames, 30.0, tol, 50).unwrap();
         write_compact_frames_with(&path, &again, &GltfOptions::default()).unwrap();
         assert_eq!(std::fs::read(&path).unwrap(), bytes);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn write_frames_lays_out_a_long_sequence_compactly_unless_told_otherwise() {
+        let frames = sequence(60);
+        let dir = std::env::temp_dir().join(format!("mk-layout-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("a.glb");
+        let write = |layout: FrameLayout, max_targets: usize| {
+            let opts = crate::io::FramesOptions {
+                gltf: GltfOptions {
+                    layout,
+                    max_targets,
+                    ..GltfOptions::default()
+                },
+                ..Default::default()
+            };
+            crate::io::write_frames(&path, &frames, &opts).unwrap();
+            read_gltf_morphs(&path).unwrap().targets.len()
+        };
+        // Longer than the budget: compact by default, one target a frame when asked.
+        let compact = write(FrameLayout::Auto, 20);
+        assert!((2..=20).contains(&compact), "{compact}");
+        assert_eq!(
+            write(FrameLayout::PerFrame, 20),
+            58,
+            "the last frame equals frame 0"
+        );
+        // Within the budget: exact by default, compact when a tolerance is given.
+        assert_eq!(write(FrameLayout::Auto, 200), 58);
+        assert_eq!(write(FrameLayout::Compact(1e-3), 200), compact);
         let _ = std::fs::remove_dir_all(&dir);
     }
 

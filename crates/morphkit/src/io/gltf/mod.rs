@@ -104,7 +104,9 @@ mod write_vertices;
 
 pub use asset::{GltfAsset, GltfAssetOptions, GltfWeightAnimation};
 pub use asset_pack::CompactEncoding;
-pub use compact_frames::{compact_frames, write_compact_frames_with, CompactFrames};
+pub use compact_frames::{
+    choose_layout, compact_frames, write_compact_frames_with, CompactFrames, FrameLayout, Layout,
+};
 pub use read::{
     parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs, read_gltf_morphs_with,
     GltfReadOptions,
@@ -153,6 +155,10 @@ pub struct GltfOptions {
     /// Store each target's `POSITION` and `NORMAL` deltas as sparse accessors listing only the
     /// vertices that move, when that is smaller than the dense accessor. Default `false`.
     pub sparse_targets: bool,
+    /// How a frame sequence is laid out ([`crate::io::write_frames`]; [`write_gltf_with`]
+    /// writes a rig as given): one target per frame, or a compact clip ([`choose_layout`]).
+    /// Default [`FrameLayout::Auto`]: compact when the sequence is longer than `max_targets`.
+    pub layout: FrameLayout,
 }
 
 impl Default for GltfOptions {
@@ -166,6 +172,7 @@ impl Default for GltfOptions {
             extras: None,
             quantize: false,
             sparse_targets: false,
+            layout: FrameLayout::Auto,
         }
     }
 }
