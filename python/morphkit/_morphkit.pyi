@@ -50,6 +50,8 @@ def write_animation(
     times: Optional[Sequence[float]] = None,
     mesh: Optional[str] = None,
     max_targets: int = 200,
+    clip_tolerance: Optional[float] = None,
+    per_frame_targets: bool = False,
 ) -> None: ...
 def read_rig(
     path: PathLike, mesh: Optional[str] = None, animation: Optional[str] = None

@@ -135,9 +135,15 @@ pub fn read_animation<'py>(
 /// (the template's). `max_targets` (default 200; 0 for no limit) refuses a mesh that would get
 /// more targets than WebGL2 viewers play.
 ///
+/// Without a template, a `.glb`/`.gltf` animation of more frames than `max_targets` is a
+/// compact clip (a few morph targets at per-frame weights, every vertex of every frame within
+/// `clip_tolerance` of the bounding-box diagonal, default 1e-3), as the CLI writes it;
+/// `clip_tolerance` asks for one at any length, `per_frame_targets=True` keeps one target per
+/// frame (split into meshes of at most `max_targets`).
+///
 /// >>> morphkit.write_animation("physical.glb", frames, template="face.glb", clip="talk-physical")
 #[pyfunction]
-#[pyo3(signature = (path, frames, f=None, fps=24.0, template=None, clip=None, times=None, mesh=None, max_targets=mio::SAFE_MORPH_TARGETS))]
+#[pyo3(signature = (path, frames, f=None, fps=24.0, template=None, clip=None, times=None, mesh=None, max_targets=mio::SAFE_MORPH_TARGETS, clip_tolerance=None, per_frame_targets=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn write_animation(
     py: Python<'_>,
@@ -150,7 +156,24 @@ pub fn write_animation(
     times: Option<Vec<f64>>,
     mesh: Option<String>,
     max_targets: usize,
+    clip_tolerance: Option<f64>,
+    per_frame_targets: bool,
 ) -> PyResult<()> {
+    let layout = match (per_frame_targets, clip_tolerance) {
+        (true, Some(_)) => {
+            return Err(pyo3::exceptions::PyValueError::new_err(
+                "give clip_tolerance or per_frame_targets, not both",
+            ))
+        }
+        (true, None) => mio::FrameLayout::PerFrame,
+        (false, Some(t)) if t.is_finite() && t > 0.0 => mio::FrameLayout::Compact(t),
+        (false, Some(t)) => {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "clip_tolerance must be a finite positive fraction of the diagonal, not {t}"
+            )))
+        }
+        (false, None) => mio::FrameLayout::Auto,
+    };
     let frames = arrays::frames("frames", frames, None)?;
     if let Some(t) = template {
         return crate::rig_io::write_animation_into(
@@ -184,10 +207,12 @@ pub fn write_animation(
         .collect();
     let set = ShapeSet::new(base, named).py(Kind::Mesh)?;
     debug_assert_eq!(set.num_vertices(), n);
-    let opts = FramesOptions {
+    let mut opts = FramesOptions {
         fps,
         ..FramesOptions::default()
     };
+    opts.gltf.max_targets = max_targets;
+    opts.gltf.layout = layout;
     py.detach(|| mio::write_frames(&path, &set, &opts))
         .py(Kind::File)
 }

@@ -48,6 +48,29 @@ def test_animation_round_trip(tmp_path, out):
     np.testing.assert_array_equal(F2, F)
 
 
+def test_a_long_animation_is_a_compact_clip(tmp_path):
+    # More frames than max_targets: a few morph targets at per-frame weights, every frame within
+    # the tolerance as read back; per_frame_targets keeps one target per frame.
+    V, F = tube(8, 6)
+    t = np.linspace(0.0, 1.0, 40)[:, None, None]
+    frames = V[None] + np.sin(np.pi * 2 * t) * [0.3, 0, 0] + np.sin(np.pi * 3 * t) ** 2 * V * [0, 0.2, 0]
+    compact, exact = tmp_path / "compact.glb", tmp_path / "exact.glb"
+    morphkit.write_animation(compact, frames, F, max_targets=10)
+    morphkit.write_animation(exact, frames, F, max_targets=10, per_frame_targets=True)
+    _, _, targets, _ = morphkit.read_morphs(compact)
+    assert 2 <= len(targets) <= 10
+    assert len(morphkit.read_morphs(exact)[2]) == 39
+    for path, tol in ((compact, 1e-3), (exact, 1e-6)):
+        back, _, _ = morphkit.read_animation(path)
+        assert np.abs(back - frames).max() <= tol * diag(V)
+    assert compact.stat().st_size * 3 < exact.stat().st_size
+    with pytest.raises(ValueError, match="finite positive"):
+        morphkit.write_animation(tmp_path / "x.glb", frames, F, clip_tolerance=0.0)
+    with pytest.raises(ValueError, match="not both"):
+        morphkit.write_animation(tmp_path / "x.glb", frames, F, clip_tolerance=1e-3, per_frame_targets=True)
+    assert not (tmp_path / "x.glb").exists()
+
+
 def test_missing_file_is_an_os_error(tmp_path):
     with pytest.raises(morphkit.FileError) as e:
         morphkit.read(tmp_path / "nope.obj")
