@@ -141,6 +141,8 @@ class PhysicalBlend:
         damping: float = 0.0,
         pair_samples: Optional[Sequence[float]] = None,  # default [0.5, 1.0]
         threads: int = 1,
+        inbetween_tolerance: float = 1e-3,  # fraction of the diagonal; 0: the regular grid
+        max_refined: int = 64,
     ) -> "BakedRig": ...
     def solve_many(
         self,

@@ -398,8 +398,11 @@ impl PyPhysicalBlend {
     /// shape with an in-between per pair sample `s` (`pair_samples`, default ½ and 1), driven
     /// by `4 wi wj ((wi + wj) / sum w) ** damping` (default damping 0: the plain product). Solves on up to
     /// `threads` threads (the result does not depend on it); in the caller's (unwelded) layout.
+    /// Where a target's interpolation between its in-betweens is farther than
+    /// `inbetween_tolerance` of the diagonal from its equilibrium (default 1e-3; 0 keeps the
+    /// regular grid), more in-betweens are added, halving segments, at most `max_refined` in all.
     #[pyo3(signature = (*, inbetweens=7, pair_tolerance=1e-4, max_pairs=120, damping=0.0,
-        pair_samples=None, threads=None))]
+        pair_samples=None, threads=None, inbetween_tolerance=1e-3, max_refined=64))]
     #[allow(clippy::too_many_arguments)]
     fn bake(
         &self,
@@ -410,6 +413,8 @@ impl PyPhysicalBlend {
         damping: f64,
         pair_samples: Option<Vec<f64>>,
         threads: Option<&Bound<'_, PyAny>>,
+        inbetween_tolerance: f64,
+        max_refined: usize,
     ) -> PyResult<crate::bake::PyBakedRig> {
         let threads = args::opt_count("threads", threads, Kind::Blend, 1)?.unwrap_or(1);
         let defaults = morphkit::bake::BakeOptions::default();
@@ -419,6 +424,8 @@ impl PyPhysicalBlend {
             max_pairs,
             damping,
             pair_samples: pair_samples.unwrap_or(defaults.pair_samples),
+            inbetween_tolerance,
+            max_refined,
         };
         let weld = self.weld.clone();
         let baked = py.detach(|| {

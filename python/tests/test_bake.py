@@ -36,7 +36,7 @@ def test_a_bake_plays_the_solve_at_its_samples_and_the_shapes_exactly():
     V, T, F = split_rig()
     blend = morphkit.PhysicalBlend(V, T, F)
     assert blend.welded_vertices == 17
-    rig = blend.bake(inbetweens=3, threads=2)
+    rig = blend.bake(inbetweens=3, threads=2, inbetween_tolerance=0.0)
     assert isinstance(rig, morphkit.BakedRig)
     assert rig.inbetween_weights == [[0.25, 0.5, 0.75, 1.0]] * 3
     assert rig.combinations == [(0, 1), (0, 2), (1, 2)]
@@ -83,3 +83,29 @@ def test_a_bake_is_closer_to_the_solve_than_the_linear_blend_between_its_samples
         baked = np.linalg.norm(rig.evaluate(w) - solved, axis=1).max()
         linear = np.linalg.norm(lin(w) - solved, axis=1).max()
         assert baked < linear, (w, baked, linear)
+
+
+def test_a_bake_adds_in_betweens_where_the_tolerance_needs_them():
+    # The 90° bends are not piecewise linear at the quarters: halving segments where the
+    # solve is farther than the tolerance adds in-betweens (at dyadic weights, each the solve
+    # there), within max_refined, and brings the bake closer to the solve between them.
+    V, T, F = split_rig()
+    blend = morphkit.PhysicalBlend(V, T, F)
+    regular = blend.bake(inbetweens=3, inbetween_tolerance=0.0, max_pairs=0)
+    refined = blend.bake(inbetweens=3, inbetween_tolerance=1e-3, max_pairs=0)
+    counts = [len(w) for w in refined.inbetween_weights]
+    assert sum(counts) > 12
+    d = diag(V)
+    worst = [0.0, 0.0]
+    for t in range(3):
+        for a in refined.inbetween_weights[t]:
+            assert (a * 32) % 1 == 0
+        for a in np.linspace(0.05, 0.95, 19):
+            w = [0.0] * 3
+            w[t] = a
+            solved = blend.solve(w)
+            for i, rig in enumerate((regular, refined)):
+                worst[i] = max(worst[i], np.abs(rig.evaluate(w) - solved).max() / d)
+    assert worst[1] < worst[0]
+    capped = blend.bake(inbetweens=3, inbetween_tolerance=1e-3, max_pairs=0, max_refined=1)
+    assert capped.num_shapes == regular.num_shapes + 1

@@ -93,6 +93,7 @@ fn library_bake(input: &std::path::Path) -> Library {
     let mut solver = PhysicalBlend::new(&welded, &BlendOptions::default()).unwrap();
     let opts = morphkit::bake::BakeOptions {
         inbetweens: 3,
+        inbetween_tolerance: 0.0,
         ..Default::default()
     };
     let baked = morphkit::bake::bake(&mut solver, &opts, 1)
@@ -119,6 +120,8 @@ fn a_baked_asset_plays_the_bake_through_its_mapping() {
         s(&input),
         "--inbetweens",
         "3",
+        "--inbetween-tolerance",
+        "0",
         "--report",
         s(&report),
         "--out",
@@ -210,6 +213,8 @@ fn a_bake_checks_itself_against_the_full_solve() {
         s(&input),
         "--inbetweens",
         "3",
+        "--inbetween-tolerance",
+        "0",
         "--out",
         s(&d.join("baked.glb")),
         "--check",
@@ -290,6 +295,8 @@ fn a_usd_bake_plays_the_bake_through_usdskel() {
         s(&input),
         "--inbetweens",
         "3",
+        "--inbetween-tolerance",
+        "0",
         "--out",
         s(&out),
     ]);
@@ -346,5 +353,75 @@ fn a_usd_bake_plays_the_bake_through_usdskel() {
         .unwrap_or_else(|| panic!("no result: {t}"));
     // f32 storage of points and offsets.
     assert!(worst <= 1e-6, "{t}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn a_bake_adds_in_betweens_where_the_tolerance_needs_them() {
+    let d = tmp_dir("bake-refine");
+    let input = d.join("in.glb");
+    fixture::write(&input, &fixture::standard(false, 100.0));
+    let rows = d.join("rows.csv");
+    std::fs::write(
+        &rows,
+        "lift,bend\n0.1,0\n0.3,0\n0.45,0\n0.6,0\n0.85,0\n0,0.1\n0,0.3\n0,0.45\n0,0.6\n0,0.85\n",
+    )
+    .unwrap();
+    let bake = |tolerance: &str, name: &str| -> Value {
+        let report = d.join(format!("{name}.json"));
+        let (_, err) = run_ok(&[
+            "bake",
+            "--rig",
+            s(&input),
+            "--inbetweens",
+            "3",
+            "--inbetween-tolerance",
+            tolerance,
+            "--out",
+            s(&d.join(format!("{name}.glb"))),
+            "--check",
+            s(&rows),
+            "--report",
+            s(&report),
+        ]);
+        assert!(err.contains("where the tolerance needed them"), "{err}");
+        serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap()
+    };
+    let (regular, refined) = (bake("0", "regular"), bake("1e-3", "refined"));
+    let count = |r: &Value| -> usize {
+        r["inbetweens"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| t.as_array().unwrap().len())
+            .sum()
+    };
+    assert_eq!(count(&regular), 8, "{}", regular["inbetweens"]);
+    assert!(count(&refined) > 8, "{}", refined["inbetweens"]);
+    assert!(refined["solves"].as_u64() > regular["solves"].as_u64());
+    let worst = |r: &Value| {
+        r["check"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["bake_error"].as_f64().unwrap())
+            .fold(0.0, f64::max)
+    };
+    assert!(
+        worst(&refined) < worst(&regular),
+        "{} against {}",
+        worst(&refined),
+        worst(&regular)
+    );
+    let e = fails(&[
+        "bake",
+        "--rig",
+        s(&input),
+        "--inbetween-tolerance",
+        "-1",
+        "--out",
+        s(&d.join("x.glb")),
+    ]);
+    assert!(e.contains("--inbetween-tolerance"), "{e}");
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -48,6 +48,12 @@ pub struct BakeArgs {
     /// Most combination shapes' pairs, those that move a vertex farthest first (default 120).
     #[arg(long)]
     pub max_pairs: Option<usize>,
+    /// More in-betweens where a target's interpolation between its in-betweens is farther than
+    /// this fraction of the diagonal from its equilibrium (default 1e-3; 0 keeps the regular
+    /// in-betweens), halving segments down to 1/64, as many as the room --max-targets leaves
+    /// (at most 64).
+    #[arg(long, value_name = "FRACTION")]
+    pub inbetween_tolerance: Option<f64>,
     /// A JSON report: counts, sizes and timings.
     #[arg(long)]
     pub report: Option<PathBuf>,
@@ -82,13 +88,22 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
         ),
     };
     let defaults = BakeOptions::default();
-    let options = BakeOptions {
+    let mut options = BakeOptions {
         inbetweens: a.inbetweens.unwrap_or(defaults.inbetweens),
         max_pairs: a.max_pairs.unwrap_or(defaults.max_pairs),
+        inbetween_tolerance: a
+            .inbetween_tolerance
+            .unwrap_or(defaults.inbetween_tolerance),
         ..defaults
     };
     if options.inbetweens == 0 {
         bail!("--inbetweens must be at least 1");
+    }
+    let t = options.inbetween_tolerance;
+    if !(t.is_finite() && t >= 0.0) {
+        bail!(
+            "--inbetween-tolerance must be a finite fraction of the diagonal, 0 or more, not {t}"
+        );
     }
     let mut inputs = vec![a.rig.clone()];
     inputs.extend(a.check.iter().cloned());
@@ -119,6 +134,14 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
     asset.check_room(most).context(
         "the bake adds in-betweens and combination shapes; lower --inbetweens or --max-pairs",
     )?;
+    // The in-betweens a tolerance adds fit in the room left.
+    if asset.max_targets() != 0 {
+        let left = (asset
+            .max_targets()
+            .saturating_sub(asset.morphs().targets.len()))
+        .saturating_sub(most);
+        options.max_refined = options.max_refined.min(left);
+    }
     let check_rows = match &a.check {
         Some(f) => check_rows(f, &m.target_names)?,
         None => Vec::new(),
@@ -172,10 +195,13 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
             "welded_vertices": weld.merged(),
             "sliders": n,
             "inbetweens_per_target": options.inbetweens,
+            // Per target, its in-betweens (its own shape at 1 included), after the tolerance.
+            "inbetweens": baked.targets.iter().map(|t| t.weights.clone()).collect::<Vec<_>>(),
+            "inbetween_tolerance": options.inbetween_tolerance,
             "combinations": baked.combinations.iter().map(|c| [c.targets.0, c.targets.1]).collect::<Vec<_>>(),
             "targets_added": added,
             "shapes_total": n + added,
-            "solves": n * options.inbetweens + n * (n - 1) / 2 * options.pair_samples.len(),
+            "solves": baked.solves,
             "threads": threads,
             "check": checked.iter().map(|c| json!({
                 "weights": c.weights,
@@ -203,10 +229,14 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<()> {
             worst.linear_error
         );
     }
+    // In-betweens proper: each target's shapes but its own at 1.
+    let inbetweens: usize = baked.targets.iter().map(|t| t.weights.len() - 1).sum();
     eprintln!(
-        "baked {n} targets into {} in-betweens and {} combination shapes ({added} shapes added) in {}",
-        n * options.inbetweens,
-        added - n * options.inbetweens,
+        "baked {n} target{} into {inbetweens} in-betweens ({} where the tolerance needed them) \
+         and {} combination shapes ({added} shapes added) in {}",
+        if n == 1 { "" } else { "s" },
+        inbetweens - n * options.inbetweens,
+        baked.combinations.len(),
         a.out.display()
     );
     Ok(())

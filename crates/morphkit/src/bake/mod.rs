@@ -35,6 +35,7 @@ use crate::springs::{BlendError, PhysicalBlend, Weights};
 use crate::ShapeSet;
 
 mod gltf;
+mod refine;
 #[cfg(test)]
 mod tests;
 mod usd;
@@ -60,6 +61,12 @@ pub struct BakeOptions {
     /// The pair samples `s`: each pair is solved at `(s, s)` (default ½ and 1), which gives
     /// its combination shape an in-between at combination weight `4 s²`.
     pub pair_samples: Vec<f64>,
+    /// More in-betweens where a target's interpolation is farther than this fraction of the
+    /// base's bounding-box diagonal from its equilibrium (default 1e-3; 0 keeps the regular
+    /// grid): see `refine.rs`.
+    pub inbetween_tolerance: f64,
+    /// Most in-betweens that tolerance adds, over all targets (default 64).
+    pub max_refined: usize,
 }
 
 impl Default for BakeOptions {
@@ -70,6 +77,8 @@ impl Default for BakeOptions {
             max_pairs: 120,
             damping: 0.0,
             pair_samples: vec![0.5, 1.0],
+            inbetween_tolerance: 1e-3,
+            max_refined: 64,
         }
     }
 }
@@ -105,6 +114,9 @@ pub struct BakedRig {
     pub combinations: Vec<Combination>,
     /// The damping exponent of the combination weights.
     pub damping: f64,
+    /// The physical solves the bake took (regular in-betweens, pair samples and the tests of
+    /// [`BakeOptions::inbetween_tolerance`]).
+    pub solves: usize,
 }
 
 /// Why a bake failed.
@@ -266,6 +278,7 @@ impl BakedRig {
             targets,
             combinations,
             damping: self.damping,
+            solves: self.solves,
         }
     }
 
@@ -310,10 +323,11 @@ pub fn bake(
         || options.pair_tolerance.is_nan()
         || options.pair_tolerance < 0.0
         || !(options.damping >= 0.0 && options.damping.is_finite())
+        || !(options.inbetween_tolerance >= 0.0 && options.inbetween_tolerance.is_finite())
     {
         return Err(BakeError::Options(format!(
             "in-betweens must be at least 1, the pair samples positive and increasing, the pair \
-             tolerance and the damping finite and not negative: {options:?}"
+             and in-between tolerances and the damping finite and not negative: {options:?}"
         )));
     }
     let shapes = solver.shapes();
@@ -366,11 +380,18 @@ pub fn bake(
             deltas,
         });
     }
+    let mut refine_solves = 0;
+    if options.inbetween_tolerance > 0.0 {
+        let tolerance = options.inbetween_tolerance * diagonal;
+        let most = options.max_refined;
+        refine_solves = refine::refine(solver, &mut targets, &base, tolerance, most, threads)?;
+    }
     let mut rig = BakedRig {
         base,
         targets,
         combinations: Vec::new(),
         damping: options.damping,
+        solves: weights.len() + refine_solves,
     };
     let mut combos: Vec<(f64, Combination)> = Vec::new();
     for (k, &(i, j)) in pairs.iter().enumerate() {

@@ -47,6 +47,7 @@ fn a_bake_is_the_solve_at_its_samples_and_the_targets_at_one() {
     let mut s = PhysicalBlend::new(&shapes, &BlendOptions::default()).unwrap();
     let opts = BakeOptions {
         inbetweens: 3,
+        inbetween_tolerance: 0.0,
         ..BakeOptions::default()
     };
     let b = bake(&mut s, &opts, 2).unwrap();
@@ -100,6 +101,7 @@ fn combination_weights_are_the_product_for_two_and_damped_for_more() {
         targets: Vec::new(),
         combinations: Vec::new(),
         damping: 1.0,
+        solves: 0,
     };
     assert_eq!(b.combination_weight(&c, &[0.0, 0.7, 0.3]), 0.0);
     assert_eq!(b.combination_weight(&c, &[-0.2, 0.7, 0.0]), 0.0);
@@ -173,6 +175,7 @@ fn shape_weights_interpolate_between_in_betweens_and_extend_the_end_segments() {
             shape: t(vec![1.0, 4.0]),
         }],
         damping: 0.0,
+        solves: 0,
     };
     let close = |a: Vec<f64>, b: &[f64]| {
         assert_eq!(a.len(), b.len());
@@ -201,4 +204,64 @@ fn shape_weights_interpolate_between_in_betweens_and_extend_the_end_segments() {
         &[0.0, 1.0, 0.0, 0.75, 5.0 / 6.0, 1.0 / 6.0],
     );
     assert_eq!(b.shapes().count(), b.num_shapes());
+}
+
+#[test]
+fn in_betweens_are_added_where_the_tolerance_needs_them_within_the_budget() {
+    let shapes = rig();
+    let diag = shapes.base().bbox_diagonal();
+    let mut s = PhysicalBlend::new(&shapes, &BlendOptions::default()).unwrap();
+    let regular = BakeOptions {
+        inbetweens: 3,
+        inbetween_tolerance: 0.0,
+        max_pairs: 0,
+        ..BakeOptions::default()
+    };
+    let tol = 2e-3;
+    let refined = BakeOptions {
+        inbetween_tolerance: tol,
+        ..regular.clone()
+    };
+    let (r, f) = (
+        bake(&mut s, &regular, 2).unwrap(),
+        bake(&mut s, &refined, 2).unwrap(),
+    );
+    let added: usize = f.targets.iter().map(|t| t.weights.len() - 4).sum();
+    assert!(added > 0, "a 90° bend at the quarters needs more");
+    assert!(f.solves > r.solves);
+    // Each added weight is a dyadic midpoint of the quarters, and its shape the solve there.
+    let mut worst = [0.0f64; 2];
+    for t in 0..3 {
+        for (&a, d) in f.targets[t].weights.iter().zip(&f.targets[t].deltas) {
+            assert_eq!((a * 32.0).fract(), 0.0, "{a}");
+            let mut w = vec![0.0; 3];
+            w[t] = a;
+            let solved = solve(&mut s, &w);
+            let baked: Vec<Point> = r
+                .base
+                .iter()
+                .zip(d)
+                .map(|(b, x)| [b[0] + x[0], b[1] + x[1], b[2] + x[2]])
+                .collect();
+            assert!(max_distance(&baked, &solved) <= 1e-12 * diag);
+        }
+        // Off the samples, the refined bake is closer to the solve than the regular one.
+        for k in 1..20 {
+            let mut w = vec![0.0; 3];
+            w[t] = k as f64 / 20.0;
+            let solved = solve(&mut s, &w);
+            for (i, b) in [&r, &f].iter().enumerate() {
+                worst[i] = worst[i].max(max_distance(&b.evaluate(&w), &solved) / diag);
+            }
+        }
+    }
+    assert!(worst[1] < worst[0] && worst[1] < 2.0 * tol, "{worst:?}");
+    // The budget holds, the farthest segments first, and the result does not depend on threads.
+    let two = BakeOptions {
+        max_refined: 2,
+        ..refined.clone()
+    };
+    let b2 = bake(&mut s, &two, 1).unwrap();
+    assert_eq!(b2.num_shapes(), r.num_shapes() + 2);
+    assert_eq!(bake(&mut s, &refined, 1).unwrap(), f);
 }
