@@ -117,6 +117,14 @@ if command -v blender >/dev/null 2>&1; then
   node "$here/check.mjs" --tol 1.001e-3 --shots "$out/shots" \
     "$out/artist-compact.glb" "$out/artist-physical" \
     "$out/long-compact.glb" "$out/long-compact" | tee -a "$out/results.jsonl"
+  # A bake of the artist's asset (Blender-exported: UV seams, two materials, a texture), with
+  # in-betweens where the bend needs them; three.js plays it through docs/bake.md's evaluation
+  # row by row like the library's, past 1 included.
+  printf 'bend\n0.1\n0.3\n0.55\n0.8\n1\n1.15\n' >"$out/artist-bake-rows.csv"
+  "$bin" bake --rig "$out/artist-rig.glb" --out "$out/artist-baked.glb" \
+    --check "$out/artist-bake-rows.csv" --check-frames "$out/artist-bake-played" --force
+  node "$here/check.mjs" --bake "$out/artist-bake-rows.csv" --shots "$out/shots" \
+    "$out/artist-baked.glb" "$out/artist-bake-played" | tee -a "$out/results.jsonl"
   # Smaller correctives: 16-bit (--quantize, KHR_mesh_quantization), and meshopt-compressed
   # like their input when gltfpack (tools/gltf-assets) packs the rig (-c, unquantized so that
   # the node keeps no dequantization transform and the OBJ frames stay comparable).
