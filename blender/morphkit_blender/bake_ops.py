@@ -12,7 +12,8 @@ expressions" (min, max, arithmetic, and `pow` only when the damping is not 0), w
 evaluates without Python: the rig plays with "Auto Run Python Scripts" off and without this
 add-on. Shape-key values may leave [0, 1] (the hat's end segments extend), so every key's
 slider range is Blender's whole [-10, 10], and each property's hard range is where its keys'
-weights stay inside it.
+weights stay inside it. Keyframes on a target's value (an animation of the sliders) move onto
+its property, since a driven value would hide them; an unbake moves them back.
 """
 
 import math
@@ -112,6 +113,54 @@ def _drive(key, kb, expression, variables, obj):
     return fc
 
 
+def _fcurve(id_data, path):
+    """The F-curve animating `path` on `id_data`, and the collection holding it (to remove it
+    from): an action's own `fcurves` (Blender up to 4.x), or the channel bags of a layered
+    action (4.4 and later); (None, None) when `path` is not keyed."""
+    ad = id_data.animation_data
+    action = ad.action if ad is not None else None
+    if action is None:
+        return None, None
+    bags = [getattr(action, "fcurves", None)]
+    for layer in getattr(action, "layers", ()):
+        for strip in getattr(layer, "strips", ()):
+            bags.extend(bag.fcurves for bag in getattr(strip, "channelbags", ()))
+    for fcurves in bags:
+        if fcurves is None:
+            continue
+        for fc in fcurves:
+            if fc.data_path == path:
+                return fc, fcurves
+    return None, None
+
+
+def move_keyframes(src, src_path, dst, dst_path, store):
+    """Moves the keyframes of `src_path` on `src` onto `dst_path` on `dst` (frame, value,
+    interpolation and handles kept; `store(value)` sets the destination's value before each
+    insert) and removes them from `src`. Returns how many moved."""
+    fc, fcurves = _fcurve(src, src_path)
+    if fc is None:
+        return 0
+    points = [
+        (tuple(p.co), p.interpolation, p.handle_left_type, p.handle_right_type,
+         tuple(p.handle_left), tuple(p.handle_right))
+        for p in fc.keyframe_points
+    ]
+    for (frame, value), *_ in points:
+        store(value)
+        dst.keyframe_insert(data_path=dst_path, frame=frame)
+    new, _ = _fcurve(dst, dst_path)
+    if new is not None and len(new.keyframe_points) == len(points):
+        for q, (co, interp, hl_type, hr_type, hl, hr) in zip(new.keyframe_points, points):
+            q.co = co
+            q.interpolation = interp
+            q.handle_left_type, q.handle_right_type = hl_type, hr_type
+            q.handle_left, q.handle_right = hl, hr
+        new.update()
+    fcurves.remove(fc)
+    return len(points)
+
+
 def unbake(obj):
     """Removes a previous bake of `obj`: its shape keys, drivers and properties (the sliders'
     values stay in their keys)."""
@@ -131,6 +180,11 @@ def unbake(obj):
             kb = key.key_blocks.get(name)
             if kb is not None and prop in obj:
                 kb.value = max(kb.slider_min, min(kb.slider_max, float(obj[prop])))
+                # The slider's animation goes back onto its key, as it was before the bake.
+                move_keyframes(
+                    obj, f'["{bpy.utils.escape_identifier(prop)}"]', key, _path(name),
+                    lambda v, kb=kb: setattr(kb, "value", v),
+                )
     for prop in info.get("properties", ()):
         if prop in obj:
             del obj[prop]
@@ -161,6 +215,13 @@ def bake_into_keys(obj, options):
             default=0.0, min=lo, max=hi, soft_min=0.0, soft_max=1.0,
             description=f"Slider of the baked physical rig: drives '{s}' and its correctives",
         )
+        # The key's value is driven from now on, which would hide its animation: the
+        # artist's keyframes move onto the slider's property and play the baked rig.
+        move_keyframes(
+            key, _path(s), obj, f'["{bpy.utils.escape_identifier(p)}"]',
+            lambda v, p=p: obj.__setitem__(p, v),
+        )
+        obj[p] = min(max(float(v), lo), hi)
     shapes = []
 
     def add(name, delta):
@@ -213,6 +274,11 @@ class MORPHKIT_OT_bake_correctives(bpy.types.Operator):
         name="Max pairs", description="At most this many combination shapes (the pairs that "
         "move a vertex farthest)", default=120, min=0,
     )
+    inbetween_tolerance: bpy.props.FloatProperty(
+        name="In-between tolerance", description="More in-betweens where a target's "
+        "interpolation is farther than this fraction of the bounding-box diagonal from its "
+        "physical equilibrium (0: the regular ones only)", default=1e-3, min=0.0, precision=6,
+    )
     damping: bpy.props.FloatProperty(
         name="Damping", description="Exponent of the combination weights' damping by the "
         "pair's share of all weights (0: none)", default=0.0, min=0.0,
@@ -240,6 +306,7 @@ class MORPHKIT_OT_bake_correctives(bpy.types.Operator):
         options = {
             "inbetweens": self.inbetweens, "pair_tolerance": self.pair_tolerance,
             "max_pairs": self.max_pairs, "damping": self.damping, "threads": self.threads,
+            "inbetween_tolerance": self.inbetween_tolerance,
         }
         try:
             rig = bake_into_keys(obj, options)

@@ -496,7 +496,7 @@ rkeys = rig_obj.data.shape_keys.key_blocks
 rkeys["bendA"].value = 0.25
 op_props = bpy.ops.morphkit.bake_correctives.get_rna_type().properties
 for name, p in inspect.signature(morphkit.PhysicalBlend.bake).parameters.items():
-    if name in ("inbetweens", "pair_tolerance", "max_pairs", "damping"):
+    if name in ("inbetweens", "pair_tolerance", "max_pairs", "damping", "inbetween_tolerance"):
         check(abs(op_props[name].default - p.default) <= 1e-6 * abs(p.default),
               f"the operator's {name} default is not the module's")
 Bb = geometry.key_coords(rkeys[0])
@@ -556,9 +556,27 @@ def play_baked(obj, rig, order, what):
     return worst
 
 
+# An animation of a slider (keyframes on its key's value, Bezier with a linear last key),
+# which the drivers would hide: the bake moves it onto the slider's property.
+rkeys["bulge"].value = 0.0
+rig_obj.data.shape_keys.keyframe_insert(data_path='key_blocks["bulge"].value', frame=1)
+rkeys["bulge"].value = 0.8
+rig_obj.data.shape_keys.keyframe_insert(data_path='key_blocks["bulge"].value', frame=21)
+bake_ops._fcurve(rig_obj.data.shape_keys, 'key_blocks["bulge"].value')[0].keyframe_points[1].interpolation = "LINEAR"
+rkeys["bulge"].value = 0.0
 # A bake with damping and 3 in-betweens, then baked again (replaced) with the defaults.
 rig, order = bake_and_check(damping=2.0, inbetweens=3)
 check(abs(rig_obj["mk_bendA"] - 0.25) < 1e-7, "the slider's property starts at the key's value")
+moved, _ = bake_ops._fcurve(rig_obj, '["mk_bulge"]')
+check(moved is not None and np.allclose([tuple(p.co) for p in moved.keyframe_points], [(1, 0), (21, 0.8)])
+      and moved.keyframe_points[1].interpolation == "LINEAR",
+      f"the slider's keyframes moved: {moved and [(tuple(p.co), p.interpolation) for p in moved.keyframe_points]}")
+check(bake_ops._fcurve(rig_obj.data.shape_keys, 'key_blocks["bulge"].value')[0] is None,
+      "the key keeps no keyframes under its driver")
+bpy.context.scene.frame_set(21)
+check(abs(rig_obj["mk_bulge"] - 0.8) < 1e-6 and abs(rkeys["bulge"].value - rig.shape_weights([0.25, 0.0, 0.8])[order.index("bulge")]) < 1e-5,
+      "the animation plays the baked rig")
+bpy.context.scene.frame_set(1)
 results["bake_damped_error"] = play_baked(rig_obj, rig, order, "damped")
 rig, order = bake_and_check()
 check("bendA@0.125" in rkeys and "bendA@0.25" in rkeys, "the default in-betweens' keys")
