@@ -23,7 +23,8 @@
 //! `EIGHTHS=1` from
 //! the predictor corrected by the target's own equilibria at every eighth (a single-target
 //! sweep); `CONTINUE=1` from the previous frame moved as the predictor moves (path-dependent).
-//! `STAGES=μ,…`, `TETHER`, `HINGE`, `GUARD` (the fold guard's weight), `HOLD_RAMP` and
+//! `STAGES=μ,…`, `TETHER`, `HINGE`, `GUARD` (the fold guard's weight), `HOLD_RAMP`,
+//! `KINEMATIC` (the kinematic stretch; `inf` for none) and
 //! `NO_SAMPLED=1` try the variants docs/choices.md measured ("Continuity in the weights").
 //! `PROFILE=1` prints every frame, `BOUND=0` every step's ratio, `DUMP=DIR` writes every
 //! frame's positions, `ONE="i:w,j:w"` solves one frame.
@@ -103,6 +104,9 @@ fn main() {
     }
     if let Some(h) = std::env::var("HOLD_RAMP").ok().and_then(|v| v.parse().ok()) {
         options.hold_ramp = h;
+    }
+    if let Some(k) = std::env::var("KINEMATIC").ok().and_then(|v| v.parse().ok()) {
+        options.kinematic_stretch = k;
     }
     if let Some(m) = std::env::var("MAXIT").ok().and_then(|v| v.parse().ok()) {
         options.max_newton_iterations = m;

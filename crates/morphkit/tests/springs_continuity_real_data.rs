@@ -47,6 +47,40 @@ fn welded_ict_eye_blink_moves_continuously_across_0_59() {
     assert!(c.jumps.is_empty(), "jumps: {:?}", c.jumps);
 }
 
+/// ICT's jawLeft over-stretches the mouth interior, whose vertices are held towards the linear
+/// blend with a stiffness that grows to a boundary condition at the hold ramp (0.05). With the
+/// hold's old gain the hold took effect only in the ramp's last tenth and pulled those vertices
+/// back onto the linear blend between 0.047 and 0.05: 6× and 15× the linear step in steps of
+/// 0.001 (8.98× at 0.0475 → 0.05 by 1/400). Now every step is within the bound.
+#[test]
+fn ict_jaw_left_moves_continuously_through_the_hold_ramp() {
+    let Some(paths) = common::ict_rig_paths() else {
+        return common::skip("ict_jaw_left_moves_continuously_through_the_hold_ramp");
+    };
+    let shapes = read_shape_set(&paths).unwrap();
+    let weld = Weld::of_shapes(&shapes, WELD_TOLERANCE);
+    let welded = weld.shapes(&shapes).unwrap();
+    let mut solver = PhysicalBlend::new(&welded, &BlendOptions::default()).unwrap();
+    let jaw = common::ICT_EXPRESSIONS
+        .iter()
+        .position(|&e| e == "jawLeft")
+        .unwrap();
+    let mut check = ContinuityCheck::new(4.0, bbox_diagonal(welded.positions(0)));
+    for k in 0..=12 {
+        let mut w = vec![0.0; common::ICT_EXPRESSIONS.len()];
+        w[jaw] = 0.044 + 0.001 * k as f64;
+        let w = Weights::Delta(w);
+        let r = solver.solve(&w).unwrap();
+        assert!(r.stats.converged, "jawLeft at {w:?}");
+        check
+            .push(&r.positions, &linear_blend(&welded, &w).unwrap())
+            .unwrap();
+    }
+    let c = check.finish();
+    eprintln!("jawLeft 0.044..0.056: worst step {:.2}×", c.worst_ratio);
+    assert!(c.jumps.is_empty(), "jumps: {:?}", c.jumps);
+}
+
 /// Bounded work: the horse's poses 1 and 6 at 0.5 and 0.7 (rest lengths extrapolated past a
 /// sum of 1) have no equilibrium near the start; the solve crept for 392 s to the iteration
 /// cap. It now stops within its factorization budget (300) and says it did not converge.

@@ -50,6 +50,14 @@ use crate::mesh::{Point, ShapeSet};
 /// it leaves, the neighbours' force over this stiffness, is a millionth of a spring's pull.
 pub(super) const HARD_FROM: f64 = 1e6;
 
+/// The gain of an over-stretched vertex's hold, `G (k/(r − k))²`: how early in the ramp the
+/// hold takes the vertex onto the linear blend (see the module documentation). With G = 1 the
+/// hold only took hold in the last tenth of the ramp, where it then pulled the mouth interior
+/// of ICT's jawLeft back onto the linear blend within 0.003 of weight (15× the linear step
+/// at 0.049 → 0.05); with G = 100 it holds from the first fifth on, while the frame is still
+/// near the base.
+pub(super) const STRETCH_HOLD_GAIN: f64 = 100.0;
+
 /// Vertices with the targets that concern each (compressed rows; target indices are shape
 /// indices, `1..#shapes`).
 #[derive(Default)]
@@ -204,7 +212,7 @@ impl FrameHolds {
                 let k = if m >= r {
                     f64::INFINITY
                 } else {
-                    (m / (r - m)).powi(2)
+                    STRETCH_HOLD_GAIN * (m / (r - m)).powi(2)
                 };
                 kappa.push((v, k));
             }
