@@ -152,14 +152,15 @@ def test_write_animation_into_a_template_adds_a_clip(tmp_path):
 
 
 def test_read_rig_reads_a_split_frame_sequence_as_what_it_is(tmp_path):
-    """450 frames written to a .glb are split into meshes of at most 200 targets (what WebGL2
-    viewers play); read_rig gives all 449 targets, one weight per target and one key and one
+    """450 frames written to a .glb with one target per frame are split into meshes of at most
+    200 targets (what WebGL2 viewers play; by default such a sequence is a compact clip,
+    test_io.py); read_rig gives all 449 targets, one weight per target and one key and one
     time per frame, so the README's recipe gets consistent arrays (issue 55)."""
     from conftest import bend, tube
 
     V, F = tube(rings=4, around=6)
     frames = np.stack([bend(V, 1e-3 + 2.0 * k / 449) for k in range(450)])
-    morphkit.write_animation(tmp_path / "long.glb", frames, F, fps=24.0)
+    morphkit.write_animation(tmp_path / "long.glb", frames, F, fps=24.0, per_frame_targets=True)
     rig = morphkit.read_rig(tmp_path / "long.glb")
     assert rig["targets"].shape == (449, len(V), 3)
     assert rig["weights"].shape == (450, 449)
