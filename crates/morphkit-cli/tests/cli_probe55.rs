@@ -188,7 +188,8 @@ fn obj_line_breaks_are_read_and_kept() {
     assert_eq!(back.matches('\n').count(), back.matches("\r\n").count());
 }
 
-/// A 450-frame `.glb` that `blend` wrote (split into meshes of 200 targets) is read by
+/// A 450-frame `.glb` that `blend` wrote with one target per frame (split into meshes of 200
+/// targets; by default it would be a compact clip, `cli_compact_frames.rs`) is read by
 /// `blend --rig` as what it is: 449 targets and one key per frame, so a blend of it to frames
 /// works; into the `.glb` itself (an edit of the split rig) it is refused, naming the file and
 /// saying it is a split frame sequence, before any solve.
@@ -198,7 +199,14 @@ fn a_split_frame_sequence_is_read_whole_by_blend_rig() {
     let long = d.join("long.glb");
     ok(&strs(&blend_demo(
         &d,
-        &["--frames", "450", "--linear", "--out", s(&long)],
+        &[
+            "--frames",
+            "450",
+            "--linear",
+            "--per-frame-targets",
+            "--out",
+            s(&long),
+        ],
     )));
     let pc2 = d.join("again.pc2");
     ok(&["blend", "--rig", s(&long), "--linear", "--out", s(&pc2)]);
