@@ -273,8 +273,8 @@ impl Outputs {
         );
         if played.0 > tolerance {
             eprintln!(
-                "warning: {}: quantized, frame {} plays {:.2e} of the diagonal from its frame, \
-                 more than --clip-tolerance {tolerance:.1e}",
+                "warning: {}: frame {} plays {:.2e} of the diagonal from its frame (the \
+                 writer's rounding), more than --clip-tolerance {tolerance:.1e}",
                 path.display(),
                 played.1,
                 played.0
@@ -393,9 +393,11 @@ impl Outputs {
                     if let Some(n) = note {
                         eprintln!("note: {}: {n}", path.display());
                     }
+                    let rig = io::frames_to_gltf(frames, opts.fps);
+                    let targets = rig.targets.len();
                     self.clips
-                        .push(json!({ "kind": "per_frame_targets", "targets": frames.len() - 1 }));
-                    self.gltf_with(path, &io::frames_to_gltf(frames, opts.fps), &opts.gltf)
+                        .push(json!({ "kind": "per_frame_targets", "targets": targets }));
+                    self.gltf_with(path, &rig, &opts.gltf)
                 }
             };
         }

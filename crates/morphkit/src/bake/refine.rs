@@ -18,31 +18,19 @@
 //!    client leaves: WebGL2 plays 200 targets a mesh), the farthest first; ties by target and
 //!    weight, so the result does not depend on threads.
 
-use super::{hat, sub, BakeError, BakedTarget};
+use super::{add_scaled, hat, sub, BakeError, BakedTarget};
+use crate::geom::max_distance;
 use crate::mesh::Point;
 use crate::springs::{PhysicalBlend, Weights};
 
 /// Rounds of halving after the regular grid (the eighths: down to 1/64).
 pub const ROUNDS: usize = 3;
 
-/// The largest vertex norm of `d`.
-fn largest(d: &[Point]) -> f64 {
-    d.iter()
-        .map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt())
-        .fold(0.0, f64::max)
-}
-
-/// `target`'s interpolated delta at `w`.
+/// `target`'s interpolated delta at `w` (`#V` of them).
 fn interpolated(target: &BakedTarget, w: f64, nv: usize) -> Vec<Point> {
     let mut out = vec![[0.0; 3]; nv];
     for (k, f) in hat(&target.weights, w) {
-        if f != 0.0 {
-            for (o, p) in out.iter_mut().zip(&target.deltas[k]) {
-                for c in 0..3 {
-                    o[c] += f * p[c];
-                }
-            }
-        }
+        add_scaled(&mut out, f, &target.deltas[k]);
     }
     out
 }
@@ -121,7 +109,7 @@ pub(super) fn refine(
             let (t, a, b) = tests[k];
             let delta = sub(&r.positions, base);
             let chord = interpolated(&targets[t], 0.5 * (a + b), nv);
-            let e = largest(&sub(&delta, &chord));
+            let e = max_distance(&delta, &chord);
             if e > tolerance {
                 found.push((e, k, delta));
             }
