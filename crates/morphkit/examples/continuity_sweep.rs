@@ -27,7 +27,7 @@
 //! `KINEMATIC` (the kinematic stretch; `inf` for none) and
 //! `NO_SAMPLED=1` try the variants docs/choices.md measured ("Continuity in the weights").
 //! `PROFILE=1` prints every frame, `BOUND=0` every step's ratio, `DUMP=DIR` writes every
-//! frame's positions, `ONE="i:w,j:w"` solves one frame.
+//! frame's positions and its predictor's, `ONE="i:w,j:w"` solves one frame.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -279,6 +279,9 @@ fn main() {
                 .flat_map(|c| c.to_le_bytes())
                 .collect();
             std::fs::write(format!("{dir}/frame-{k:04}.f64"), bytes).unwrap();
+            let p = solver.predict(w).unwrap();
+            let bytes: Vec<u8> = p.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+            std::fs::write(format!("{dir}/predicted-{k:04}.f64"), bytes).unwrap();
             if k == 0 {
                 let t: Vec<u8> = welded
                     .triangles()
