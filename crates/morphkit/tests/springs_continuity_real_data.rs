@@ -75,6 +75,30 @@ fn ict_jaw_left_moves_continuously_through_the_hold_ramp() {
     assert!(c.jumps.is_empty(), "jumps: {:?}", c.jumps);
 }
 
+/// The fold guard lets a triangle go where the predictor and the linear blend disagree about
+/// its orientation. Decided at each frame's own weights, that set was a step function of them,
+/// and a triangle held at the guard's wall was caught or released in one step: jawOpen jumped
+/// 16.8× the linear step at 0.27 → 0.2725 (139× by 1/3200) and jawLeft 4.95× at 0.49 →
+/// 0.4925 (19× by 1/1600, 49–70 Newton iterations). The trust is now interpolated between
+/// the corners of a grid of ¼ (`springs::guard_trust`); both ranges move continuously, swept
+/// by 1/400, within the 30 Newton iterations a frame.
+#[test]
+fn ict_jaw_open_and_jaw_left_move_continuously_where_the_guard_lets_go() {
+    for (expression, from) in [("jawOpen", 0.265), ("jawLeft", 0.48)] {
+        let alphas = (0..=8).map(move |k| from + 0.0025 * k as f64);
+        let Some(c) = sweep_welded_ict(expression, alphas, Some(30)) else {
+            return common::skip(
+                "ict_jaw_open_and_jaw_left_move_continuously_where_the_guard_lets_go",
+            );
+        };
+        eprintln!(
+            "{expression} from {from} by 1/400: worst step {:.2}×",
+            c.worst_ratio
+        );
+        assert!(c.jumps.is_empty(), "{expression}: jumps {:?}", c.jumps);
+    }
+}
+
 /// Bounded work: the horse's poses 1 and 6 at 0.5 and 0.7 (rest lengths extrapolated past a
 /// sum of 1) have no equilibrium near the start; the solve crept for 392 s to the iteration
 /// cap. It now stops within its factorization budget (300) and says it did not converge.

@@ -81,8 +81,9 @@ fn ict_expression_sequences() {
 }
 
 /// Without the tether, horse-04's lower hind leg snaps between two frames: the continuity
-/// check reports a jump of a few hundred vertices (the leg below the hock, of the 8 431), and
-/// the frames still converge without folds. With it (the default, [`horse_pose_sequences`])
+/// check reports a jump of tens to hundreds of vertices (of the 8 431: a few hundred, the leg
+/// below the hock, before the fold guard's trust was interpolated on a grid; 42 since, at
+/// 4.27× the linear step), and the frames still converge without folds. With it (the default, [`horse_pose_sequences`])
 /// the same sequence moves at most 1.7× the linear step.
 #[test]
 fn the_tether_joins_the_horse_legs_branches() {
@@ -96,8 +97,13 @@ fn the_tether_joins_the_horse_legs_branches() {
     let mut solver = PhysicalBlend::new(&s, &options).unwrap();
     let rep = check_sequence("horse-04 untethered", &mut solver, 1, 0, 36);
     let region = rep.continuity.as_ref().expect("checked").jump_vertices();
+    eprintln!(
+        "horse-04 untethered: {} vertices jump, worst step {:.2}×",
+        region.len(),
+        rep.worst_step
+    );
     assert!(
-        (50..=1000).contains(&region.len()),
+        (20..=1000).contains(&region.len()),
         "{} vertices jump",
         region.len()
     );

@@ -1,9 +1,11 @@
 //! One frame's energy on a prepared [`Rig`]: the rig's terms with the frame's parameters,
 //! the frame's holds ([`super::holds`]) and a user's point targets, the tether to the
-//! predictor $P(w)$ and the fold guard. The full solve ([`super::solve`]) and the
+//! predictor $P(w)$ and the fold guard (with the trust and references of
+//! [`guard_trust`](super::guard_trust)). The full solve ([`super::solve`]) and the
 //! interactive mode ([`super::interactive`]) minimise this same energy, so that the
 //! interactive shape approximates the canonical equilibrium and not a neighbouring one.
 
+use super::guard_trust::guard_references;
 use super::predictor;
 use super::rig::Rig;
 use super::terms::{EnergyTerm, Held, OrientationTerm, PointTarget, PointTerm, TermParameters};
@@ -61,7 +63,9 @@ impl Rig {
         }
         let guard = predicted.as_deref().filter(|_| guarded).map(|p| {
             let world = rotated.as_deref().unwrap_or(&lin);
-            OrientationTerm::new(self.shapes.triangles(), p, world, &lin, self.guard_weight)
+            let reference = guard_references(&self.shapes, c, p, world, &lin);
+            let trust = self.guard_trust(c);
+            OrientationTerm::new(self.shapes.triangles(), reference, trust, self.guard_weight)
         });
         let params = self.terms.iter().map(|t| t.prepare(c)).collect();
         FrameEnergy {

@@ -99,6 +99,7 @@ mod direct;
 mod frame;
 mod frame_solver;
 mod gauge;
+mod guard_trust;
 mod holds;
 pub mod interactive;
 pub mod interior;

@@ -8,43 +8,46 @@
 //! squeeze a triangle through zero area, and the equilibrium keeps it turned over although
 //! neither the shapes, the linear blend nor the predictor $P(w)$ fold it.
 //!
-//! Per frame, each triangle $t = (a, b, c)$ whose orientation in $P(w)$ agrees with the linear
-//! blend's (normals within [`AGREE_COS`]) gets the unit normal $\hat u_t$ and doubled area
-//! $|n_t|$ of its place in $P(w)$, and its signed area ratio
-//! $s_t(x) = \hat u_t \cdot \big((b - a) \times (c - a)\big) / |n_t|$: 1 where the triangle keeps
-//! its predicted area and orientation, 0 edge-on, negative turned over. The energy is
+//! Per frame, each triangle $t = (a, b, c)$ gets a reference $r_t = \hat u_t / |n_t|$: the
+//! unit normal $\hat u_t$ it is held to (its normal in $P(w)$, turned towards the shapes'
+//! mean normal where $P$'s own triangle is turned against the shapes) over its doubled area
+//! $|n_t|$ in $P(w)$; and a trust $\gamma_t \in [0, 1]$, which fades the guard out where the
+//! predictor and the linear blend disagree about the triangle (a part turning by about half a
+//! turn, where either may be wrong). Both are continuous functions of the weights, computed
+//! in `springs::guard_trust`. The signed area ratio
+//! $s_t(x) = r_t \cdot \big((b - a) \times (c - a)\big)$ is 1 where the triangle keeps its
+//! predicted area and orientation, 0 edge-on, negative turned over. The energy is
 //!
-//! $$E = \tfrac12\, \kappa \sum_t \min(0,\; s_t - s_0)^2,$$
+//! $$E = \tfrac12\, \kappa \sum_t \gamma_t \min(0,\; s_t - s_0)^2,$$
 //!
 //! with $\kappa$ = `fold_guard` $\cdot\, \bar k\, \overline{l^2}$ (the hinges' unit) and
-//! $s_0 =$ [`GUARD_FROM`]. Where $P$ and the linear blend disagree about a triangle (a part
-//! turning by about half a turn, where either may be wrong), there is no trusted orientation
-//! and no guard. It is zero wherever a triangle stays within about 84° of its predicted
-//! orientation, so it leaves other equilibria as they were and the shapes exact. $s$ is
-//! bilinear in the corners: $\partial s/\partial b = (c - a) \times r$, $\partial s/\partial c =
-//! r \times (b - a)$, $\partial s/\partial a = -(\partial s/\partial b + \partial s/\partial c)$
-//! with $r = \hat u / |n|$; its second derivatives are the constant blocks $\partial^2
+//! $s_0 =$ [`GUARD_FROM`]. It is zero wherever a triangle stays within about 84° of its
+//! reference at its predicted area, so it leaves other equilibria as they were and the shapes
+//! exact. $s$ is bilinear in the corners: $\partial s/\partial b = (c - a) \times r$,
+//! $\partial s/\partial c = r \times (b - a)$, $\partial s/\partial a = -(\partial s/\partial b +
+//! \partial s/\partial c)$; its second derivatives are the constant blocks $\partial^2
 //! s/\partial a\,\partial b = \partial^2 s/\partial b\,\partial c = -[r]_\times$, $\partial^2
 //! s/\partial a\,\partial c = [r]_\times$ (and transposes). The projected Hessian is
-//! Gauss–Newton, $\kappa\, \nabla s\, \nabla s^\top$.
+//! Gauss–Newton, $\kappa\,\gamma_t \nabla s\, \nabla s^\top$.
 
 use super::{BlockHessian, EnergyTerm, HessianKind, TermParameters};
-use crate::mesh::Point;
 use nalgebra::{Matrix3, Vector3};
 
 /// The signed area ratio below which the guard acts (a triangle turned about 84° from its
 /// predicted orientation at its predicted area).
 pub const GUARD_FROM: f64 = 0.1;
 
-/// The predictor's and the linear blend's normals of a guarded triangle agree within this
-/// cosine (60°).
+/// The predictor's and the linear blend's normals of a trusted triangle agree within this
+/// cosine (60°), at the corners of the grid its trust is interpolated on.
 pub const AGREE_COS: f64 = 0.5;
 
 /// The fold guard of one frame (see the [module docs](self)).
 pub(crate) struct OrientationTerm<'a> {
     triangles: &'a [[u32; 3]],
-    /// Per triangle: $r = \hat u / |n|$ from the predictor (zero where unguarded).
+    /// Per triangle: $r = \hat u / |n|$ (zero where unguarded).
     reference: Vec<Vector3<f64>>,
+    /// Per triangle: the trust $\gamma \in [0, 1]$.
+    trust: Vec<f64>,
     /// κ in absolute units.
     weight: f64,
 }
@@ -54,44 +57,31 @@ fn v3(x: &[f64], i: u32) -> Vector3<f64> {
     Vector3::new(x[i], x[i + 1], x[i + 2])
 }
 
-fn normal_of(p: &[Point], [a, b, c]: [u32; 3]) -> Vector3<f64> {
-    let q = |v: u32| Vector3::from(p[v as usize]);
-    (q(b) - q(a)).cross(&(q(c) - q(a)))
-}
-
 fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }
 
 impl<'a> OrientationTerm<'a> {
-    /// The guard of `triangles` against their places in `predicted` (solver coordinates,
-    /// `3 #V`), on the triangles whose normals in the predictor and the linear blend (both in
-    /// world coordinates: `predicted_world`, `lin`) agree; absolute stiffness `weight`.
+    /// The guard of `triangles` with per-triangle `reference` $r_t$ (solver coordinates) and
+    /// `trust` $\gamma_t$; absolute stiffness `weight`. A triangle with zero trust or reference
+    /// is not guarded.
     pub fn new(
         triangles: &'a [[u32; 3]],
-        predicted: &[f64],
-        predicted_world: &[Point],
-        lin: &[Point],
+        reference: Vec<Vector3<f64>>,
+        trust: Vec<f64>,
         weight: f64,
     ) -> Self {
-        let reference = triangles
-            .iter()
-            .map(|&t| {
-                let (np, nl) = (normal_of(predicted_world, t), normal_of(lin, t));
-                let agree = np.dot(&nl) > AGREE_COS * np.norm() * nl.norm();
-                let [a, b, c] = t.map(|v| v3(predicted, v));
-                let n = (b - a).cross(&(c - a));
-                let l2 = n.norm_squared();
-                if agree && l2 > 0.0 && l2.is_finite() {
-                    n / l2
-                } else {
-                    Vector3::zeros()
-                }
-            })
+        debug_assert_eq!(reference.len(), triangles.len());
+        debug_assert_eq!(trust.len(), triangles.len());
+        let reference = reference
+            .into_iter()
+            .zip(&trust)
+            .map(|(r, &g)| if g > 0.0 { r } else { Vector3::zeros() })
             .collect();
         Self {
             triangles,
             reference,
+            trust,
             weight,
         }
     }
@@ -138,18 +128,19 @@ impl EnergyTerm for OrientationTerm<'_> {
 
     fn energy(&self, _p: &TermParameters, x: &[f64]) -> f64 {
         self.active(x)
-            .map(|(_, d, _)| 0.5 * self.weight * d * d)
+            .map(|(t, d, _)| 0.5 * self.weight * self.trust[t] * d * d)
             .sum()
     }
 
     fn add_gradient(&self, _p: &TermParameters, x: &[f64], g: &mut [f64]) -> f64 {
         let mut e = 0.0;
         for (t, d, grad) in self.active(x) {
-            e += 0.5 * self.weight * d * d;
+            let w = self.weight * self.trust[t];
+            e += 0.5 * w * d * d;
             for (&v, gv) in self.triangles[t].iter().zip(&grad) {
                 let i = 3 * v as usize;
                 for k in 0..3 {
-                    g[i + k] += self.weight * d * gv[k];
+                    g[i + k] += w * d * gv[k];
                 }
             }
         }
@@ -160,9 +151,10 @@ impl EnergyTerm for OrientationTerm<'_> {
         for (t, d, grad) in self.active(x) {
             let tri = self.triangles[t];
             let rx = skew(&self.reference[t]);
+            let w = self.weight * self.trust[t];
             for i in 0..3 {
                 for j in i..3 {
-                    let mut m = grad[i] * grad[j].transpose() * self.weight;
+                    let mut m = grad[i] * grad[j].transpose() * w;
                     if kind == HessianKind::Exact {
                         // ∂²s/∂(corner i)∂(corner j), i < j: a–b and b–c −[r]×, a–c [r]×.
                         let sign = match (i, j) {
@@ -170,7 +162,7 @@ impl EnergyTerm for OrientationTerm<'_> {
                             (0, 2) => 1.0,
                             _ => 0.0,
                         };
-                        m += rx * (sign * self.weight * d);
+                        m += rx * (sign * w * d);
                     }
                     let b: [[f64; 3]; 3] =
                         std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]));
@@ -187,37 +179,53 @@ mod tests {
     use super::*;
     use crate::mesh::generate;
 
-    /// A flat grid (the predictor and the linear blend) and the same grid with interior
-    /// vertex 5, at (⅓, ⅓), pushed across its neighbours: the triangles around it turn over.
-    fn setup() -> (Vec<[u32; 3]>, Vec<Point>, Vec<f64>, Vec<f64>) {
+    /// A flat grid (the predictor) with each triangle's own reference, and the same grid with
+    /// interior vertex 5, at (⅓, ⅓), pushed across its neighbours: the triangles around it
+    /// turn over.
+    type Setup = (Vec<[u32; 3]>, Vec<Vector3<f64>>, Vec<f64>, Vec<f64>);
+
+    fn setup() -> Setup {
         let m = generate::grid(3, 3, 1.0, 1.0);
         let flat: Vec<f64> = m.positions.iter().flatten().copied().collect();
         let mut x = flat.clone();
         x[15] += 0.9;
         x[16] += 0.7;
         x[17] += 0.05;
-        (m.triangles, m.positions, flat, x)
+        let reference = m
+            .triangles
+            .iter()
+            .map(|&[a, b, c]| {
+                let [a, b, c] = [a, b, c].map(|v| Vector3::from(m.positions[v as usize]));
+                let n = (b - a).cross(&(c - a));
+                n / n.norm_squared()
+            })
+            .collect();
+        (m.triangles, reference, flat, x)
     }
 
     #[test]
     fn zero_on_the_predictor_and_positive_where_triangles_turn_over() {
-        let (tris, world, flat, x) = setup();
-        let term = OrientationTerm::new(&tris, &flat, &world, &world, 2.0);
+        let (tris, reference, flat, x) = setup();
+        let n = tris.len();
+        let term = OrientationTerm::new(&tris, reference.clone(), vec![1.0; n], 2.0);
         let p = TermParameters::default();
         assert_eq!(term.energy(&p, &flat), 0.0);
-        assert!(term.energy(&p, &x) > 0.0);
+        let full = term.energy(&p, &x);
+        assert!(full > 0.0);
         assert!(term.active(&x).count() >= 1);
-        // Where the predictor and the linear blend disagree, nothing is guarded.
-        let mut turned = world.clone();
-        turned.iter_mut().for_each(|q| q[1] = -q[1]);
-        let off = OrientationTerm::new(&tris, &flat, &world, &turned, 2.0);
+        // The trust scales each triangle's share; with none, nothing is guarded.
+        let half = OrientationTerm::new(&tris, reference.clone(), vec![0.5; n], 2.0);
+        assert!((half.energy(&p, &x) - 0.5 * full).abs() <= 1e-12 * full);
+        let off = OrientationTerm::new(&tris, reference, vec![0.0; n], 2.0);
         assert_eq!(off.energy(&p, &x), 0.0);
+        assert_eq!(off.active(&x).count(), 0);
     }
 
     #[test]
     fn gradient_and_exact_hessian_match_finite_differences() {
-        let (tris, world, flat, x) = setup();
-        let term = OrientationTerm::new(&tris, &flat, &world, &world, 2.0);
+        let (tris, reference, _, x) = setup();
+        let trust = (0..tris.len()).map(|t| 0.25 + 0.04 * t as f64).collect();
+        let term = OrientationTerm::new(&tris, reference, trust, 2.0);
         let p = TermParameters::default();
         let (err, gmax) = gradient_error(&term, &p, &x);
         assert!(
