@@ -303,10 +303,16 @@ fn a_long_clip_of_many_targets_stays_small_from_a_packed_input() {
         );
     } else {
         // Packed as the input is: 16-bit correctives, meshopt-compressed with the weights
-        // (270 KB for 46 correctives, 7.9× the input; 943 KB as f32).
+        // (338 KB for 53 correctives, 9.9× the input, since the fold guard's trust is
+        // interpolated on a grid, issue 54; 270 KB for 46 before; 943 KB as f32).
         assert_eq!(clip["quantized"], true, "{clip}");
         assert_eq!(clip["meshopt"], "EXT_meshopt_compression", "{clip}");
-        assert!(size_out <= 8 * size_in, "{size_out} vs {size_in}");
+        assert!(size_out <= 10 * size_in, "{size_out} vs {size_in}");
+        // About 5.7 KB a corrective, all told: far under an f32 corrective's 17 KB.
+        assert!(
+            size_out - size_in <= k * 7_000,
+            "{size_out} vs {size_in}, {k} correctives"
+        );
     }
     fixture::assert_valid(&[&out]);
     let _ = std::fs::remove_dir_all(&d);

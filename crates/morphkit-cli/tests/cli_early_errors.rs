@@ -2,7 +2,9 @@
 //! key times do not increase was accepted, every frame solved, and then refused naming the
 //! output clip (`Wave-physical`, after a warning pointing to an `OUT-jumps.ply` that was never
 //! written); `transfer` of 201 frames onto a `.glb` target was refused for `--max-targets` only
-//! after the correspondence and every solve. Both are now refused before any solve.
+//! after the correspondence and every solve. Both are now refused before any solve (the
+//! transfer only where one target per frame is asked for: by default those frames now go into
+//! the asset as a compact clip, issue 56).
 
 mod common;
 #[path = "../../morphkit/tests/common/gltf_asset.rs"]
@@ -72,7 +74,9 @@ fn transfer_onto_a_gltf_target_is_refused_for_max_targets_before_any_solve() {
         "--out",
         s(&out),
     ];
-    let e = fails(&transfer);
+    let mut per_frame = transfer.to_vec();
+    per_frame.push("--per-frame-targets");
+    let e = fails(&per_frame);
     assert!(
         e.contains("target.glb: the mesh would have 203 morph targets (2 + 201), more than 200"),
         "{e}"
@@ -84,7 +88,26 @@ fn transfer_onto_a_gltf_target_is_refused_for_max_targets_before_any_solve() {
     assert!(!out.exists());
     // Allowed, the same command does the work and writes the asset.
     let mut allowed = vec!["--max-targets", "0"];
-    allowed.extend(transfer);
+    allowed.extend(per_frame);
     let (_, err) = run_ok(&allowed);
     assert!(err.contains("factorized") && out.exists(), "{err}");
+    assert_eq!(io::read_gltf_morphs(&out).unwrap().targets.len(), 203);
+    std::fs::remove_file(&out).unwrap();
+    // By default, the 201 frames go into the asset as a compact clip: the asset's two targets
+    // and a few of the frames' displacements, played within the default tolerance.
+    let report = d.join("report.json");
+    let mut compact = transfer.to_vec();
+    compact.extend(["--report", s(&report)]);
+    let (_, err) = run_ok(&compact);
+    assert!(err.contains("targets of their displacements"), "{err}");
+    let written = io::read_gltf_morphs(&out).unwrap();
+    let added = written.targets.len() - 2;
+    assert!((1..=20).contains(&added), "{added} targets added");
+    assert_eq!(written.target_names[..2], rig.target_names[..]);
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let clip = &r["clip"];
+    assert_eq!(clip["kind"], "compact", "{r}");
+    let error = clip["max_error"].as_f64().unwrap();
+    assert!(error > 0.0 && error <= 1e-3, "{clip}");
 }

@@ -19,8 +19,6 @@ use super::blend_inputs::Input;
 use super::blend_rig::Rig;
 use super::blend_solve::{finish, Surface};
 use crate::outputs::Outputs;
-use anyhow::Context;
-use morphkit::clip::{self, ClipError};
 use morphkit::mesh::{Point, ShapeSet};
 use morphkit::springs::linear_blend;
 use serde_json::{json, Value};
@@ -126,20 +124,9 @@ fn add_physical_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
 }
 
 /// Adds the physical animation `rig.clip` compactly: the asset's own targets at the clip's
-/// weights, plus the fewest corrective targets ([`morphkit::clip::residual_basis`] of the
-/// frames' residuals against the linear blend) that bring every vertex of every frame within
-/// `--clip-tolerance` of the solve, as many as `--max-targets` leaves room for
-/// ([`morphkit::io::GltfAsset::add_compact_animation`]). The correctives are stored as small
-/// as the asset's own data: quantized when the asset uses `KHR_mesh_quantization` or
-/// `--quantize` is given, meshopt-compressed when the asset is
-/// ([`morphkit::io::CompactEncoding`]); each is rounded to its storage grid before the next is
-/// found ([`morphkit::clip::residual_basis_on`]). The error reported is measured on what a
-/// viewer plays: the stored targets at the stored (f32) key weights.
+/// weights, plus corrective targets spanning the frames' residuals against the linear blend
+/// ([`crate::outputs::clip::add_compact_to_asset`]).
 fn add_compact_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
-    let relative = crate::outputs::clip_flags()
-        .0
-        .unwrap_or(clip::DEFAULT_TOLERANCE);
-    let diagonal = frames.shapes.base().bbox_diagonal();
     let n_targets = frames.shapes.len() - 1;
     let mut residuals = Vec::with_capacity(frames.positions.len());
     let mut weights = Vec::with_capacity(frames.positions.len());
@@ -154,51 +141,13 @@ fn add_compact_clip(frames: &mut RigFrames) -> anyhow::Result<Value> {
         let c = frames.rig.weights[k].coefficients(frames.shapes.len())?;
         weights.push(c[1..=n_targets].to_vec());
     }
-    let asset = &mut frames.rig.asset;
-    let mut encoding = asset.compact_encoding();
-    encoding.quantize |= crate::outputs::quantize_flag();
-    let have = asset.morphs().targets.len();
-    let room = match asset.max_targets() {
-        0 => usize::MAX,
-        m => m.saturating_sub(have),
+    let clip = crate::outputs::clip::AssetClip {
+        name: &frames.rig.clip,
+        times: &frames.rig.times,
+        positions: &frames.positions,
+        weights: &weights,
+        residuals: &residuals,
+        diagonal: frames.shapes.base().bbox_diagonal(),
     };
-    let tolerance = relative * diagonal;
-    let grid = asset.corrective_grid(&encoding, tolerance);
-    let basis =
-        clip::residual_basis_on(&residuals, tolerance, room, grid).map_err(|e| match e {
-            ClipError::TooManyShapes { frame, error, .. } => anyhow::anyhow!(
-                "{}: the compact clip '{}' needs more corrective targets than the {room} that \
-             --max-targets leaves beside the asset's {have} (with {room}, frame {frame} is \
-             {:.2e} of the diagonal off); raise --clip-tolerance, allow more targets \
-             (--max-targets 0), or give --per-frame-targets",
-                asset.path().display(),
-                frames.rig.clip,
-                error / diagonal
-            ),
-            e => anyhow::anyhow!("{}: the compact clip: {e}", asset.path().display()),
-        })?;
-    let (name, times) = (&frames.rig.clip, &frames.rig.times);
-    asset.add_compact_animation(name, times, &weights, &basis, &encoding)?;
-    // What a viewer plays: the stored targets at the stored key weights.
-    let anim = asset
-        .weight_animation(Some(&frames.rig.clip))?
-        .context("the compact clip was not added")?;
-    let (mut worst, mut worst_frame) = (0.0f64, 0);
-    for (k, (_, w)) in anim.keys.iter().enumerate() {
-        let played = asset.morphs().evaluate(w);
-        let e = morphkit::geom::max_distance(&played, &frames.positions[k]);
-        if e > worst {
-            (worst, worst_frame) = (e, k);
-        }
-    }
-    Ok(json!({
-        "kind": "compact",
-        "asset_targets": n_targets,
-        "corrective_targets": basis.shapes.len(),
-        "quantized": encoding.quantize,
-        "meshopt": encoding.meshopt,
-        "tolerance": relative,
-        "max_error": worst / diagonal,
-        "worst_frame": worst_frame,
-    }))
+    crate::outputs::clip::add_compact_to_asset(&mut frames.rig.asset, &clip)
 }

@@ -195,6 +195,7 @@ pub fn run(args: &SynthArgs) -> anyhow::Result<()> {
                 "target_vertices": built.target.num_vertices(),
                 "target_triangles": built.target.num_triangles(),
                 "follow_layer": s.follow_layer(),
+                "clip": outputs.clips().last(),
                 "welded_vertices": {
                     "target": built.weld.merged(),
                     "sources": built.source_welded_vertices,

@@ -311,6 +311,10 @@ pub fn run(args: &TransferArgs) -> anyhow::Result<()> {
             "solve_max_s": solve_max,
             "gradients_per_frame_s": grad_total / n,
         });
+        // How a .glb/.gltf animation was laid out (a compact clip or a target per frame).
+        if let Some(clip) = outputs.clips().last() {
+            report["clip"] = clip.clone();
+        }
         report["target_vertices"] = json!(target.num_vertices());
         report["target_triangles"] = json!(target.num_triangles());
         let constraint: Vec<u32> = tr
