@@ -373,10 +373,12 @@ fn a_jump_between_frames_is_reported_with_its_region() {
     assert!(!ply.exists());
 }
 
-/// `blend` tells its jumps apart (issue 54): on cragl's cylinder, pose1-3 snaps near 0.57
-/// (the equilibrium the frames were on ends; halving the step keeps the move in one half),
-/// while pose1-4 only moves smoothly faster than the bound (up to 5× the linear step). The
-/// report lists the snaps, and the warning says which.
+/// `blend` tells its jumps apart (issue 54): on cragl's cylinder, pose1-3 and pose1-4 move
+/// smoothly faster than the bound (up to 5× the linear step: halving a step keeps its ratio),
+/// and the warning says that none of them snaps. pose1-3 snapped near 0.57 (18× and 50×)
+/// until the fold guard's trust was interpolated on a grid (docs/choices.md, "Continuity in
+/// the weights"); the kinking tube's snaps, which the warning calls snaps, are checked in
+/// `cli_compact_clip.rs`.
 #[test]
 fn blend_tells_a_snap_from_a_fast_step() {
     let Some(data) = std::env::var_os("MORPHKIT_DATA") else {
@@ -386,7 +388,7 @@ fn blend_tells_a_snap_from_a_fast_step() {
     let cyl = std::path::Path::new(&data).join("cragl-bending-cylinder");
     let d = tmp_dir("blend-snaps");
     let base = cyl.join("cylinder-rest.obj");
-    for (target, snaps) in [("pose1-3", true), ("pose1-4", false)] {
+    for target in ["pose1-3", "pose1-4"] {
         let t = cyl.join(format!("cylinder-{target}.obj"));
         assert!(base.exists() && t.exists(), "{} is missing", t.display());
         let (out, report) = (d.join(target), d.join(format!("{target}.json")));
@@ -400,18 +402,11 @@ fn blend_tells_a_snap_from_a_fast_step() {
         let jumps = r["continuity"]["jumps"].as_array().unwrap().len();
         let found = r["snaps"].as_array().unwrap().len();
         assert!(jumps >= 1, "{target}: {}", r["continuity"]);
-        if snaps {
-            assert!(
-                found >= 1 && err.contains("a snap"),
-                "{target}: {} {err}",
-                r["snaps"]
-            );
-        } else {
-            assert!(
-                found == 0 && err.contains("none of them snaps"),
-                "{target}: {err}"
-            );
-        }
+        assert!(
+            found == 0 && err.contains("none of them snaps"),
+            "{target}: {} {err}",
+            r["snaps"]
+        );
     }
     let _ = std::fs::remove_dir_all(&d);
 }
