@@ -409,7 +409,7 @@ impl Outputs {
     /// Stages an animation of a command's `target` mesh file: into the user's asset when both
     /// `target` and `path` are glTF (the frames added as the clip `clip`, at `k / fps` seconds:
     /// one morph target each, [`io::GltfAsset::add_frame_animation`], or compactly where the
-    /// rule of sequences says so, `compacts_onto_asset`), into the target's own OBJ records for
+    /// rule of sequences says so, [`clip::compacts_onto_asset`]), into the target's own OBJ records for
     /// a frame directory of an OBJ target, and as [`Outputs::frames`] otherwise.
     pub fn frames_of_target(
         &mut self,
@@ -424,8 +424,8 @@ impl Outputs {
                 .map(|k| frames.positions(k).to_vec())
                 .collect();
             let times = clip_times(frames.len(), opts.fps);
-            if compacts_onto_asset(&asset, frames.len()) {
-                let summary = add_frames_compactly(&mut asset, clip, &times, &positions)?;
+            if clip::compacts_onto_asset(&asset, frames.len()) {
+                let summary = clip::add_frames_compactly(&mut asset, clip, &times, &positions)?;
                 self.gltf_asset_with(path, &asset, &opts.inputs, frames.len(), true)?;
                 eprintln!(
                     "added the animation '{clip}' ({} frames: {} targets of their displacements, \
@@ -552,7 +552,7 @@ pub fn check_frames_of_target(
 ) -> anyhow::Result<()> {
     if let Some(asset) = target_asset(path, target, vertices)? {
         let times = clip_times(frames, fps);
-        if compacts_onto_asset(&asset, frames) {
+        if clip::compacts_onto_asset(&asset, frames) {
             check_compact_asset_flags(path)?;
             asset.check_clip_keys(clip, &times, frames)?;
         } else {
@@ -561,49 +561,6 @@ pub fn check_frames_of_target(
         }
     }
     Ok(())
-}
-
-/// Whether `frames` frames go into the user's `asset` as a compact clip (the rule of
-/// sequences, `outputs_clip.rs`): asked for with `--clip-tolerance`, or due because one target
-/// per frame would pass `--max-targets` beside the asset's own; never with
-/// `--per-frame-targets`.
-fn compacts_onto_asset(asset: &io::GltfAsset, frames: usize) -> bool {
-    let (tolerance, per_frame) = clip_flags();
-    let room = match asset.max_targets() {
-        0 => usize::MAX,
-        m => m.saturating_sub(asset.morphs().targets.len()),
-    };
-    !per_frame && (tolerance.is_some() || frames > room)
-}
-
-/// Adds `positions` (frames of the asset's mesh) to `asset` as the compact clip `clip`: its own
-/// targets at weight 0, and targets spanning the frames' displacements from its base.
-fn add_frames_compactly(
-    asset: &mut io::GltfAsset,
-    clip: &str,
-    times: &[f64],
-    positions: &[Vec<morphkit::mesh::Point>],
-) -> anyhow::Result<serde_json::Value> {
-    let base = asset.morphs().base.positions.clone();
-    let residuals: Vec<Vec<morphkit::mesh::Point>> = positions
-        .iter()
-        .map(|p| {
-            p.iter()
-                .zip(&base)
-                .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
-                .collect()
-        })
-        .collect();
-    let weights = vec![vec![0.0; asset.morphs().targets.len()]; positions.len()];
-    let c = crate::outputs::clip::AssetClip {
-        name: clip,
-        times,
-        positions,
-        weights: &weights,
-        residuals: &residuals,
-        diagonal: asset.morphs().base.bbox_diagonal(),
-    };
-    crate::outputs::clip::add_compact_to_asset(asset, &c)
 }
 
 /// Tells on stderr when a glTF animation was split or will not play everywhere.

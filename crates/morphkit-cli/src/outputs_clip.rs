@@ -112,3 +112,46 @@ pub(crate) fn played_error(path: &Path, frames: &ShapeSet) -> Result<(f64, usize
     }
     Ok((worst / diagonal, at))
 }
+
+/// Whether `frames` frames go into the user's `asset` as a compact clip (the rule of
+/// sequences, module documentation): asked for with `--clip-tolerance`, or due because one target
+/// per frame would pass `--max-targets` beside the asset's own; never with
+/// `--per-frame-targets`.
+pub(crate) fn compacts_onto_asset(asset: &io::GltfAsset, frames: usize) -> bool {
+    let (tolerance, per_frame) = crate::outputs::clip_flags();
+    let room = match asset.max_targets() {
+        0 => usize::MAX,
+        m => m.saturating_sub(asset.morphs().targets.len()),
+    };
+    !per_frame && (tolerance.is_some() || frames > room)
+}
+
+/// Adds `positions` (frames of the asset's mesh) to `asset` as the compact clip `clip`: its own
+/// targets at weight 0, and targets spanning the frames' displacements from its base.
+pub(crate) fn add_frames_compactly(
+    asset: &mut io::GltfAsset,
+    clip: &str,
+    times: &[f64],
+    positions: &[Vec<morphkit::mesh::Point>],
+) -> anyhow::Result<serde_json::Value> {
+    let base = asset.morphs().base.positions.clone();
+    let residuals: Vec<Vec<morphkit::mesh::Point>> = positions
+        .iter()
+        .map(|p| {
+            p.iter()
+                .zip(&base)
+                .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+                .collect()
+        })
+        .collect();
+    let weights = vec![vec![0.0; asset.morphs().targets.len()]; positions.len()];
+    let c = AssetClip {
+        name: clip,
+        times,
+        positions,
+        weights: &weights,
+        residuals: &residuals,
+        diagonal: asset.morphs().base.bbox_diagonal(),
+    };
+    add_compact_to_asset(asset, &c)
+}
