@@ -163,6 +163,16 @@ if command -v blender >/dev/null 2>&1; then
     "$bin" "${transfer[@]}" --out "$out/$name"
     pairs+=("$out/$name.glb" "$out/$name")
   done
+  # A DCC-exported sequence (issue 56): Blender skins the cylinder to a two-bone armature that
+  # bends and twists, and its OBJ exporter writes 240 unpadded frames (skinned1.obj …
+  # skinned240.obj, played in frame order); more frames than --max-targets, so `convert`
+  # writes a compact clip, 16-bit with --quantize, played like the same frames as OBJ.
+  blender -b --factory-startup --python "$here/../blender-check/export_skinned_sequence.py" -- \
+    "$out/plain-rest.obj" "$out/skinned-seq" 240 >/dev/null
+  "$bin" convert "$out/skinned-seq" "$out/skinned" --force
+  "$bin" convert "$out/skinned-seq" "$out/skinned.glb" --force
+  "$bin" --quantize convert "$out/skinned-seq" "$out/skinned-quantized.glb" --force
+  pairs+=("$out/skinned.glb" "$out/skinned" "$out/skinned-quantized.glb" "$out/skinned")
   node "$here/check.mjs" --tol 1.001e-3 --shots "$out/shots" "${pairs[@]}" \
     | tee -a "$out/results.jsonl"
   # The interactive mode (issue 38) on the textured asset: the clip a TD bakes from the slider

@@ -232,3 +232,31 @@ fn convert_into_a_frame_directory_drops_stale_frames() {
     names.sort();
     assert_eq!(names, ["frame_0000.obj", "frame_0001.obj"]);
 }
+
+#[test]
+fn unpadded_frame_numbers_convert_in_frame_order() {
+    // Blender's OBJ exporter numbers an animation's files without padding (anim1 … anim12):
+    // a directory and a glob of them play in frame order, not anim1, anim10, anim11, anim12, anim2.
+    let d = tmp_dir("io-unpadded");
+    let seq = d.join("anim");
+    std::fs::create_dir_all(&seq).unwrap();
+    for k in 1..=12 {
+        write_strip(&seq.join(format!("anim{k}.obj")), 4, k as f64 * 0.1);
+    }
+    let glob = format!("{}/anim*.obj", s(&seq));
+    for (input, out) in [
+        (s(&seq), d.join("from-dir")),
+        (glob.as_str(), d.join("from-glob")),
+    ] {
+        ok(&["convert", input, s(&out)]);
+        for k in 0..12 {
+            let v = obj_vertices(&out.join(format!("frame_{k:04}.obj")));
+            // The strip's last vertex rises by bend × 1 = (k + 1) × 0.1.
+            let z = v[v.len() - 1][2];
+            assert!(
+                (z - (k + 1) as f64 * 0.1).abs() < 1e-9,
+                "{input}: frame {k} has z {z}"
+            );
+        }
+    }
+}

@@ -12,7 +12,7 @@ const EXAMPLES: &str = "\
 Examples:
   morphkit convert bunny.obj.gz bunny.ply                 # one mesh, any two formats
   morphkit convert 'cat-run/*.obj.gz' cat-run.glb          # a sequence (glob, quoted) to a glTF animation
-  morphkit convert cat-run/ --fps 30 cat-run.glb           # the OBJ files of a directory, sorted by name
+  morphkit convert cat-run/ --fps 30 cat-run.glb           # the OBJ files of a directory, in frame order
   morphkit convert a.obj b.obj c.obj anim.pc2              # several files to a point cache
   morphkit convert cat-run.glb frames/                     # an animation back to frames/frame_0000.obj, …
   morphkit convert anim.pc2 --reference rest.obj frames/   # PC2 needs the mesh for its connectivity
@@ -71,7 +71,8 @@ pub(crate) struct Inputs {
 }
 
 /// Expands input arguments: a glob pattern (an argument with `*`, `?` or `[` that is not an
-/// existing path) becomes its matching files sorted by name, a directory its OBJ frames
+/// existing path) becomes its matching files sorted by name, frame numbers as numbers
+/// ([`io::sort_frame_paths`]), a directory its OBJ frames
 /// ([`io::obj_files`]), anything else stays as given.
 pub(crate) fn expand(args: &[String]) -> anyhow::Result<Inputs> {
     let mut files = Vec::new();
@@ -88,7 +89,7 @@ pub(crate) fn expand(args: &[String]) -> anyhow::Result<Inputs> {
             if matches.is_empty() {
                 bail!("no files match '{a}'");
             }
-            matches.sort();
+            io::sort_frame_paths(&mut matches);
             files.extend(matches);
         } else if p.is_dir() {
             dirs += 1;

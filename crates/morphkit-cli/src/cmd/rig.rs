@@ -22,7 +22,7 @@ Examples:
   morphkit rig --source-shapes face-rig.glb --target character.glb --mesh Head \\
       --markers markers.json --out character-rig.glb
 
-One morph target per source shape, in the order given (a glob expands sorted by name), named by
+One morph target per source shape, in the order given (a glob expands sorted by name, numbers as numbers: `pose2` before `pose10`), named by
 the file stem (jawOpen.obj.gz → jawOpen) or the source GLB's target names. Deltas are relative to
 the target mesh as given (its neutral). The neutral stays where it is (no root motion); a
 target posed differently from the source (rotated, scaled) gets the expressions rotated and

@@ -21,6 +21,7 @@ mod atomic;
 pub mod colors;
 mod error;
 mod format;
+pub mod frame_order;
 mod frame_stream;
 pub mod gltf;
 pub mod obj;
@@ -40,6 +41,7 @@ pub use atomic::{canonical_path, check_not_input, write_atomic};
 pub use colors::{diverging, scalar_colors, viridis, Colors, NAN_GREY};
 pub use error::IoError;
 pub use format::Format;
+pub use frame_order::{natural_cmp, sort_frame_paths};
 pub use frame_stream::FrameStream;
 pub use gltf::is_valid_target_name;
 pub use gltf::{

@@ -108,8 +108,9 @@ pub fn read_shape_set_with(
     Ok(set)
 }
 
-/// The `.obj` and `.obj.gz` files of a directory, sorted by name: the frames a directory
-/// argument stands for. An empty list is an [`IoError::Content`] error naming the directory.
+/// The `.obj` and `.obj.gz` files of a directory, sorted by name with frame numbers compared
+/// as numbers ([`super::sort_frame_paths`]: `anim2.obj` before `anim10.obj`): the frames a
+/// directory argument stands for. An empty list is an [`IoError::Content`] error naming the directory.
 pub fn obj_files(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
     let entries = std::fs::read_dir(dir).map_err(|e| IoError::os(dir, "list the directory", e))?;
     let mut files = Vec::new();
@@ -121,7 +122,7 @@ pub fn obj_files(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
             files.push(p);
         }
     }
-    files.sort();
+    super::sort_frame_paths(&mut files);
     if files.is_empty() {
         return Err(IoError::content(
             dir,
@@ -205,7 +206,7 @@ pub fn frames_to_gltf(frames: &ShapeSet, fps: f64) -> GltfMorphs {
 }
 
 /// Reads an animation or a rig as a [`ShapeSet`]:
-/// - a directory: its `*.obj` / `*.obj.gz` files sorted by name (see [`read_shape_set`]);
+/// - a directory: its `*.obj` / `*.obj.gz` files in frame order ([`obj_files`]);
 /// - `.glb` / `.gltf`: see [`gltf_to_frames`];
 /// - `.usda`: one shape per `points` time sample (`frame_NNNN`), see [`read_usd_animation`];
 /// - `.pc2`: one shape per sample (`frame_NNNN`) over `reference`'s connectivity, which is

@@ -105,7 +105,7 @@ fn read_frames(
             if m.is_empty() {
                 return Err(format!("no files match '{s}'"));
             }
-            m.sort();
+            crate::io::sort_frame_paths(&mut m);
             files.extend(m);
         } else if p.is_dir()
             || matches!(
