@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 
 pub use crate::outputs_flags::{
     asset_max_targets, check_asset_flags, check_clip_flags, check_compact_asset_flags, clip_flags,
-    quantize_flag, set_context, OutputFlags,
+    meshopt_flag, quantize_flag, set_context, OutputFlags,
 };
 use crate::outputs_flags::{context, refuse_asset_flags};
 

@@ -39,8 +39,8 @@ pub(crate) struct AssetClip<'a> {
 /// frame within `--clip-tolerance` of the diagonal (default [`clip::DEFAULT_TOLERANCE`]), as
 /// many as `--max-targets` leaves room for ([`io::GltfAsset::add_compact_animation`]). The
 /// correctives are stored as small as the asset's own data: quantized when the asset uses
-/// `KHR_mesh_quantization` or `--quantize` is given, meshopt-compressed when the asset is
-/// ([`io::CompactEncoding`]). Returns the `--report` summary; its error is measured on what a
+/// `KHR_mesh_quantization` or `--quantize` is given, meshopt-compressed when the asset is or
+/// `--meshopt` is given ([`io::CompactEncoding`]). Returns the `--report` summary; its error is measured on what a
 /// viewer plays: the stored targets at the stored (f32) key weights.
 pub(crate) fn add_compact_to_asset(
     asset: &mut io::GltfAsset,
@@ -51,6 +51,9 @@ pub(crate) fn add_compact_to_asset(
         .unwrap_or(clip::DEFAULT_TOLERANCE);
     let mut encoding = asset.compact_encoding();
     encoding.quantize |= crate::outputs::quantize_flag();
+    if crate::outputs::meshopt_flag() && encoding.meshopt.is_none() {
+        encoding.meshopt = Some(io::MESHOPT_EXTENSION.to_string());
+    }
     let have = asset.morphs().targets.len();
     let room = match asset.max_targets() {
         0 => usize::MAX,

@@ -1,4 +1,4 @@
-//! The output flags every subcommand accepts (`--max-targets`, `--quantize`,
+//! The output flags every subcommand accepts (`--max-targets`, `--quantize`, `--meshopt`,
 //! `--sparse-targets`, `--no-normals`) and the run's context every output is stamped with
 //! (the flags, the subcommand, the command line): set once by `main`, read by the writers in
 //! [`crate::outputs`], and checked against asset edits, which keep the asset's own encoding.
@@ -27,6 +27,14 @@ pub struct OutputFlags {
     /// (the asset's own data stays as it is).
     #[arg(long, global = true)]
     pub quantize: bool,
+    /// Compress .glb/.gltf output with EXT_meshopt_compression (which viewers must support:
+    /// three.js with GLTFLoader.setMeshoptDecoder, Blender 3.4+, Babylon.js): vertex data,
+    /// morph deltas and animation keys, losslessly; with --quantize as gltfpack -c writes.
+    /// With `blend --rig X --out Y.glb` (and transfer or synth onto an asset): the compact
+    /// clip's new data (the asset's own data stays as it is; an asset compressed already keeps
+    /// its compression without the flag).
+    #[arg(long, global = true)]
+    pub meshopt: bool,
     /// Store each morph target of .glb/.gltf output as a sparse accessor listing only the
     /// vertices that move (when that is smaller): for shapes that move part of the mesh.
     #[arg(long, global = true)]
@@ -66,6 +74,7 @@ impl OutputFlags {
             opts.normals = false;
         }
         opts.quantize |= self.quantize;
+        opts.meshopt |= self.meshopt;
         opts.sparse_targets |= self.sparse_targets;
         if self.per_frame_targets {
             opts.layout = io::FrameLayout::PerFrame;
@@ -122,8 +131,8 @@ pub fn check_asset_flags(out: &Path) -> anyhow::Result<()> {
     refuse_asset_flags(out, false)
 }
 
-/// [`check_asset_flags`] for an edit that adds a compact clip: `--quantize` applies to its
-/// corrective targets ([`io::CompactEncoding::quantize`]), the others are refused.
+/// [`check_asset_flags`] for an edit that adds a compact clip: `--quantize` and `--meshopt`
+/// apply to its new data ([`io::CompactEncoding`]), the others are refused.
 pub fn check_compact_asset_flags(out: &Path) -> anyhow::Result<()> {
     refuse_asset_flags(out, true)
 }
@@ -165,10 +174,16 @@ pub fn quantize_flag() -> bool {
     context().flags.quantize
 }
 
+/// Whether `--meshopt` was given.
+pub fn meshopt_flag() -> bool {
+    context().flags.meshopt
+}
+
 pub(crate) fn refuse_asset_flags(out: &Path, quantize_applies: bool) -> anyhow::Result<()> {
     let f = context().flags;
     let given: Vec<&str> = [
         (f.quantize && !quantize_applies, "--quantize"),
+        (f.meshopt && !quantize_applies, "--meshopt"),
         (f.sparse_targets, "--sparse-targets"),
         (f.no_normals, "--no-normals"),
     ]

@@ -36,6 +36,10 @@ fn the_flags_are_documented() {
         "{h}"
     );
     assert!(h.contains("--sparse-targets"), "{h}");
+    assert!(
+        h.contains("--meshopt") && h.contains("EXT_meshopt_compression"),
+        "{h}"
+    );
     let h = ok(&["blend", "--help"]);
     assert!(
         h.contains("--quantize") && h.contains("--sparse-targets"),
@@ -127,6 +131,99 @@ fn quantized_sparse_animations_read_back_within_the_bound() {
         let text = String::from_utf8_lossy(&out.stdout);
         assert!(out.status.success(), "{text}");
         assert_eq!(text.matches(": 0 errors, 0 warnings").count(), 5, "{text}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn meshopt_compresses_animations_and_compact_clips_and_is_refused_where_an_asset_keeps_its_data() {
+    let d = tmp_dir("gltf-meshopt");
+    let (base, bent) = (d.join("base.obj"), d.join("bent.obj"));
+    write_tube(&base, 16, 12, 1.0, 0.0);
+    write_tube(&bent, 16, 12, 1.0, 1.0);
+    let frames = d.join("frames");
+    ok(&blend_args(
+        &base,
+        &bent,
+        &["--frames", "12", "--out", s(&frames)],
+    ));
+    // An animation, f32 and quantized: lossless against the same file without --meshopt.
+    for flags in [vec![], vec!["--quantize"]] {
+        let tag = flags.join("");
+        let (plain, packed) = (d.join(format!("p{tag}.glb")), d.join(format!("m{tag}.glb")));
+        let mut args = vec!["convert", s(&frames)];
+        args.extend(flags.iter().copied());
+        ok(&[&args[..], &[s(&plain)]].concat());
+        ok(&[&args[..], &["--meshopt", s(&packed)]].concat());
+        let doc = glb_json(&packed);
+        assert!(
+            doc["extensionsRequired"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|e| e == "EXT_meshopt_compression"),
+            "{}",
+            doc["extensionsRequired"]
+        );
+        // A solve's f32 positions carry round-off in their low bits, which the byte-wise codec
+        // cannot predict: a small saving; 16-bit data compresses well.
+        let (packed_size, plain_size) = (size(&packed), size(&plain));
+        let bound = if flags.is_empty() {
+            plain_size
+        } else {
+            plain_size * 3 / 4
+        };
+        assert!(packed_size < bound, "{tag}: {packed_size} vs {plain_size}");
+        let (a, b) = (d.join(format!("bp{tag}")), d.join(format!("bm{tag}")));
+        ok(&["convert", s(&plain), s(&a)]);
+        ok(&["convert", s(&packed), s(&b)]);
+        for k in 0..12 {
+            let f = format!("frame_{k:04}.obj");
+            assert_eq!(
+                obj_positions(&a.join(&f)),
+                obj_positions(&b.join(&f)),
+                "{tag} {f}"
+            );
+        }
+    }
+    // A user's asset: one target per frame keeps the asset's own encoding (refused), a compact
+    // clip compresses its new data (and says so in --report).
+    let rig = d.join("rig.glb");
+    ok(&["convert", s(&base), s(&bent), s(&rig)]);
+    let weights = d.join("w.csv");
+    std::fs::write(&weights, "bent\n0\n0.3\n0.6\n1\n").unwrap();
+    let out = d.join("out.glb");
+    let blend = [
+        "blend",
+        "--rig",
+        s(&rig),
+        "--weights-file",
+        s(&weights),
+        "--out",
+        s(&out),
+    ];
+    let e = fails(&[&blend[..], &["--meshopt", "--per-frame-targets"]].concat());
+    assert!(e.contains("--meshopt not applied to an edit"), "{e}");
+    assert!(!out.exists());
+    let report = d.join("r.json");
+    ok(&[&blend[..], &["--meshopt", "--report", s(&report)]].concat());
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(r["clip"]["meshopt"], "EXT_meshopt_compression", "{r}");
+    assert!(glb_json(&out)["extensionsRequired"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|e| e == "EXT_meshopt_compression"));
+    if let Some(script) = std::env::var_os("MORPHKIT_GLTF_VALIDATOR") {
+        let out = std::process::Command::new("node")
+            .arg(script)
+            .args([d.join("m.glb"), d.join("m--quantize.glb"), out.clone()])
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{text}");
+        assert_eq!(text.matches(": 0 errors, 0 warnings").count(), 3, "{text}");
     }
     let _ = std::fs::remove_dir_all(&d);
 }

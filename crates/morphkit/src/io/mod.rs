@@ -49,7 +49,7 @@ pub use gltf::{
     read_gltf_morphs_with, write_compact_frames_with, write_gltf_morphs, write_gltf_scene,
     write_gltf_scene_with, write_gltf_with, CompactEncoding, CompactFrames, FrameLayout, GltfAsset,
     GltfAssetOptions, GltfMorphs, GltfOptions, GltfReadOptions, GltfRigidMesh, GltfSummary,
-    GltfWeightAnimation, Layout, SAFE_MORPH_TARGETS,
+    GltfWeightAnimation, Layout, MESHOPT_EXTENSION, SAFE_MORPH_TARGETS,
 };
 pub use obj_template::ObjTemplate;
 pub use ply::{write_ply_colored, PlyEncoding};

@@ -42,6 +42,7 @@
 
 use super::asset::GltfAsset;
 use super::asset_edit::{array, push, FLOAT};
+use super::meshopt_pack::encode_attributes;
 use super::normals::vertex_normals;
 use crate::clip::{ClipBasis, Grid};
 use crate::io::IoError;
@@ -467,26 +468,4 @@ fn bounds(p: &[Point]) -> ([f64; 3], [f64; 3]) {
         }
     }
     (lo, hi)
-}
-
-/// `count` elements of `stride` bytes (a multiple of 4, at most 256) encoded by meshopt's
-/// vertex codec, version 0.
-fn encode_attributes(bytes: &[u8], stride: usize, count: usize) -> Vec<u8> {
-    debug_assert!(stride.is_multiple_of(4) && stride <= 256 && bytes.len() == stride * count);
-    // SAFETY: `out` holds the bound the encoder asks for; `bytes` holds count × stride bytes.
-    unsafe {
-        let bound = meshopt::ffi::meshopt_encodeVertexBufferBound(count, stride);
-        let mut out = vec![0u8; bound];
-        let n = meshopt::ffi::meshopt_encodeVertexBufferLevel(
-            out.as_mut_ptr(),
-            out.len(),
-            bytes.as_ptr().cast(),
-            count,
-            stride,
-            2,
-            0,
-        );
-        out.truncate(n);
-        out
-    }
 }

@@ -252,7 +252,7 @@ pub fn write_compact_frames_with(
     let normals =
         (opts.normals && !clip.normal_deltas.is_empty()).then_some(clip.normal_deltas.as_slice());
     let (doc, b, summary) = build_with_normals(path, &clip.morphs, opts, normals)?;
-    let (doc, bin) = finish(doc, b);
+    let (doc, bin) = finish(doc, b, opts);
     write_document(path, doc, &bin)?;
     Ok(summary)
 }

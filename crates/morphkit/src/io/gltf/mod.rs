@@ -93,6 +93,7 @@ mod buffers;
 mod choose;
 mod compact_frames;
 mod extensions;
+mod meshopt_pack;
 mod normals;
 mod precheck;
 mod read;
@@ -107,6 +108,7 @@ pub use asset_pack::CompactEncoding;
 pub use compact_frames::{
     choose_layout, compact_frames, write_compact_frames_with, CompactFrames, FrameLayout, Layout,
 };
+pub use meshopt_pack::EXT as MESHOPT_EXTENSION;
 pub use read::{
     parse_gltf_morphs, parse_gltf_morphs_with, read_gltf_morphs, read_gltf_morphs_with,
     GltfReadOptions,
@@ -159,6 +161,12 @@ pub struct GltfOptions {
     /// writes a rig as given): one target per frame, or a compact clip ([`choose_layout`]).
     /// Default [`FrameLayout::Auto`]: compact when the sequence is longer than `max_targets`.
     pub layout: FrameLayout,
+    /// Compress the written buffer views with `EXT_meshopt_compression` (listed as used and
+    /// required; three.js needs `GLTFLoader.setMeshoptDecoder`): vertex attributes, morph
+    /// deltas and animation data, a morph-weight key at a time; index buffers and sparse
+    /// accessors stay as they are (see `meshopt_pack.rs`). Lossless: the decoded bytes are the
+    /// ones written without it. Default `false`.
+    pub meshopt: bool,
 }
 
 impl Default for GltfOptions {
@@ -173,6 +181,7 @@ impl Default for GltfOptions {
             quantize: false,
             sparse_targets: false,
             layout: FrameLayout::Auto,
+            meshopt: false,
         }
     }
 }

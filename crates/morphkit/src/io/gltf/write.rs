@@ -436,14 +436,20 @@ fn dequantization_json(d: Dequant) -> Value {
     json!({"translation": d.offset, "scale": d.scale})
 }
 
-/// Pads the buffer and writes the buffer views, accessors and buffer into the document.
-pub(super) fn finish(mut doc: Value, mut b: Builder) -> (Value, Vec<u8>) {
+/// Pads the buffer and writes the buffer views, accessors and buffer into the document,
+/// compressing the views with `EXT_meshopt_compression` when `opts.meshopt`
+/// ([`super::meshopt_pack`]).
+pub(super) fn finish(mut doc: Value, mut b: Builder, opts: &GltfOptions) -> (Value, Vec<u8>) {
     while !b.bin.len().is_multiple_of(4) {
         b.bin.push(0);
     }
     doc["bufferViews"] = Value::Array(b.views);
     doc["accessors"] = Value::Array(b.accessors);
     doc["buffers"] = json!([{"byteLength": b.bin.len()}]);
+    if opts.meshopt {
+        let bin = super::meshopt_pack::compress_views(&mut doc, &b.bin);
+        return (doc, bin);
+    }
     (doc, b.bin)
 }
 
@@ -468,7 +474,7 @@ pub fn write_gltf_with(
     opts: &GltfOptions,
 ) -> Result<GltfSummary, IoError> {
     let (doc, b, summary) = build_with(path, m, opts)?;
-    let (doc, bin) = finish(doc, b);
+    let (doc, bin) = finish(doc, b, opts);
     write_document(path, doc, &bin)?;
     Ok(summary)
 }

@@ -130,7 +130,7 @@ pub fn write_gltf_scene_with(
     for r in rigid {
         add_rigid(path, &mut doc, &mut b, r)?;
     }
-    let (doc, bin) = finish(doc, b);
+    let (doc, bin) = finish(doc, b, opts);
     write_document(path, doc, &bin)?;
     Ok(summary)
 }
