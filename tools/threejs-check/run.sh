@@ -57,6 +57,11 @@ node "$here/check.mjs" --tol 1.001e-3 --shots "$out/shots" "$out/bend24-compact.
 "$bin" convert "$out/tube2100" --quantize --sparse-targets "$out/tube2100-packed.glb"
 node "$here/check.mjs" --tol 1e-4 --shots "$out/shots" "$out/tube2100-packed.glb" "$out/tube2100" \
   | tee -a "$out/results.jsonl"
+# The horse gallop quantized and meshopt-compressed (--meshopt, EXT_meshopt_compression: 10.1 MB
+# → 5.9 MB), which GLTFLoader decodes with three's MeshoptDecoder.
+"$bin" --quantize --meshopt convert "$out/horse-gallop" "$out/horse-gallop-meshopt.glb"
+node "$here/check.mjs" --tol 1e-4 --shots "$out/shots" "$out/horse-gallop-meshopt.glb" \
+  "$out/horse-gallop" | tee -a "$out/results.jsonl"
 # A baked rig (issue 56): the cylinder with two targets (bend-4 and pose1-4, through a frame
 # sequence), baked with in-betweens and combination shapes; three.js plays it through the
 # JavaScript evaluation in docs/bake.md (check.mjs --bake loads that block itself), row by row
@@ -166,13 +171,16 @@ if command -v blender >/dev/null 2>&1; then
   # A DCC-exported sequence (issue 56): Blender skins the cylinder to a two-bone armature that
   # bends and twists, and its OBJ exporter writes 240 unpadded frames (skinned1.obj …
   # skinned240.obj, played in frame order); more frames than --max-targets, so `convert`
-  # writes a compact clip, 16-bit with --quantize, played like the same frames as OBJ.
+  # writes a compact clip, 16-bit with --quantize (and meshopt-compressed with --meshopt),
+  # played like the same frames as OBJ.
   blender -b --factory-startup --python "$here/../blender-check/export_skinned_sequence.py" -- \
     "$out/plain-rest.obj" "$out/skinned-seq" 240 >/dev/null
   "$bin" convert "$out/skinned-seq" "$out/skinned" --force
   "$bin" convert "$out/skinned-seq" "$out/skinned.glb" --force
   "$bin" --quantize convert "$out/skinned-seq" "$out/skinned-quantized.glb" --force
-  pairs+=("$out/skinned.glb" "$out/skinned" "$out/skinned-quantized.glb" "$out/skinned")
+  "$bin" --quantize --meshopt convert "$out/skinned-seq" "$out/skinned-meshopt.glb" --force
+  pairs+=("$out/skinned.glb" "$out/skinned" "$out/skinned-quantized.glb" "$out/skinned"
+    "$out/skinned-meshopt.glb" "$out/skinned")
   node "$here/check.mjs" --tol 1.001e-3 --shots "$out/shots" "${pairs[@]}" \
     | tee -a "$out/results.jsonl"
   # The interactive mode (issue 38) on the textured asset: the clip a TD bakes from the slider
