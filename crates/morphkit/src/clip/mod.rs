@@ -25,14 +25,22 @@
 //!    earlier ones, and the error reported is that of the stored numbers, not of the exact
 //!    SVD.
 //!
-//! The computation is sequential (faer without threads), so the same frames give the same
-//! shapes, bytes included, on any machine load.
+//! Where the Gram matrix would cost more than [`EXACT_FLOPS`] (1 800 frames of a 26 719-vertex
+//! face: 2.6e11), the directions of step 1 come in blocks of 16 from a randomized range finder
+//! run on what the shapes chosen so far leave (`randomized.rs`), so the work grows with the
+//! shapes the tolerance needs; steps 2 and 3 are the same.
+//!
+//! The computation is sequential (faer without threads; the range finder's test matrix from a
+//! fixed seed), so the same frames give the same shapes, bytes included, on any machine load.
 
 use crate::mesh::Point;
 use faer::{Mat, Side};
 
+mod randomized;
 #[cfg(test)]
 mod tests;
+
+pub use randomized::{block_flops, exact_flops, EXACT_FLOPS};
 
 /// The default tolerance of a compact clip, as a fraction of the base's bounding-box diagonal:
 /// the largest vertex error of any frame (issue 56: within a viewer's pixel at any usual
@@ -190,7 +198,18 @@ pub fn residual_basis_on(
     frames: &[Vec<Point>],
     tolerance: f64,
     max_shapes: usize,
+    grid: impl FnMut(&[Point]) -> (f64, Grid),
+) -> Result<ClipBasis, ClipError> {
+    basis_by_route(frames, tolerance, max_shapes, grid, false)
+}
+
+/// [`residual_basis_on`], with the directions in blocks whatever the size when `blocks`.
+pub(crate) fn basis_by_route(
+    frames: &[Vec<Point>],
+    tolerance: f64,
+    max_shapes: usize,
     mut grid: impl FnMut(&[Point]) -> (f64, Grid),
+    blocks: bool,
 ) -> Result<ClipBasis, ClipError> {
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(ClipError::Tolerance(tolerance));
@@ -219,12 +238,18 @@ pub fn residual_basis_on(
         }
         rest.push(fr.iter().flatten().copied().collect());
     }
-    let directions = principal_directions(&rest, d);
+    // The exact directions where the Gram matrix is cheap, else blocks drawn as they are used.
+    let blocks = blocks || exact_flops(nf, d) > EXACT_FLOPS;
+    let mut queue: std::collections::VecDeque<Vec<f64>> = if blocks {
+        Default::default()
+    } else {
+        principal_directions(&rest, d).into()
+    };
+    let mut signs = randomized::Signs::new();
     let mut shapes: Vec<Vec<f64>> = Vec::new();
     let mut grids: Vec<Grid> = Vec::new();
     let mut coefficients: Vec<Vec<f64>> = vec![Vec::new(); nf];
     let mut errors: Vec<f64> = rest.iter().map(|r| row_max(r)).collect();
-    let mut next = directions.into_iter();
     loop {
         let (worst, &error) = errors
             .iter()
@@ -242,8 +267,12 @@ pub fn residual_basis_on(
                 tolerance,
             });
         }
-        // The next principal direction, or the worst frame's own remainder.
-        let dir = next.next().unwrap_or_else(|| rest[worst].clone());
+        // The next principal direction (a new block of them from what remains, when they come
+        // in blocks), or the worst frame's own remainder.
+        if queue.is_empty() && blocks {
+            queue = randomized::block_directions(&rest, d, &mut signs).into();
+        }
+        let dir = queue.pop_front().unwrap_or_else(|| rest[worst].clone());
         let shape = match stored_shape(&rest, &dir, &mut grid) {
             Some(s) => s,
             // A direction nothing projects on (rounded to zero): take the pivot instead.

@@ -200,3 +200,54 @@ fn shapes_on_an_integer_grid_report_the_error_of_the_stored_numbers() {
 fn peak_of(p: &[Point]) -> f64 {
     p.iter().flatten().fold(0.0, |m, x| m.max(x.abs()))
 }
+
+#[test]
+fn blocks_from_the_range_finder_need_about_as_many_shapes_as_the_exact_directions() {
+    // Rank 30 (two blocks and more) with decaying coefficients and a little noise, on both
+    // sides of the Gram matrix's shape (F < 3V and F > 3V).
+    for (f, v, seed) in [(150, 200, 3), (400, 60, 5)] {
+        let mut fr = frames(f, v, 30, 0.0, seed);
+        let decay = frames(f, v, 30, 2e-4, seed + 1);
+        for (a, b) in fr.iter_mut().zip(&decay) {
+            for (p, q) in a.iter_mut().zip(b) {
+                for k in 0..3 {
+                    p[k] = 0.05 * p[k] + q[k] * 0.001;
+                }
+            }
+        }
+        let tolerance = 0.02;
+        let exact = basis_by_route(&fr, tolerance, 200, |_| (1.0, Grid::F32), false).unwrap();
+        let blocks = basis_by_route(&fr, tolerance, 200, |_| (1.0, Grid::F32), true).unwrap();
+        for b in [&exact, &blocks] {
+            assert!(b.max_error <= tolerance, "{}", b.max_error);
+            let w = worst(&fr, b);
+            assert!((w - b.max_error).abs() <= 1e-12, "{w} vs {}", b.max_error);
+        }
+        let (ne, nb) = (exact.shapes.len(), blocks.shapes.len());
+        assert!(
+            nb > YIELD_FOR_TESTS,
+            "{nb}: one block would do, the test tests too little"
+        );
+        assert!(
+            nb <= ne + ne / 5 + 2,
+            "{f}×{v}: {nb} shapes in blocks, {ne} exact"
+        );
+        // The same frames, the same bits.
+        let again = basis_by_route(&fr, tolerance, 200, |_| (1.0, Grid::F32), true).unwrap();
+        assert_eq!(again.shapes, blocks.shapes);
+        assert_eq!(again.coefficients, blocks.coefficients);
+        eprintln!("{f}×{v}: {ne} exact, {nb} in blocks");
+    }
+}
+
+const YIELD_FOR_TESTS: usize = randomized::YIELD;
+
+#[test]
+fn the_block_route_is_taken_only_where_the_gram_matrix_is_expensive() {
+    // 2 100 frames of the 420-vertex tube: the exact route (as before); 1 800 frames of the
+    // 26 719-vertex ICT head: blocks, about 5× fewer operations for 64 shapes.
+    assert!(exact_flops(2100, 3 * 420) < EXACT_FLOPS);
+    assert!(exact_flops(335, 3 * 26719) < EXACT_FLOPS);
+    assert!(exact_flops(1800, 3 * 26719) > EXACT_FLOPS);
+    assert!(block_flops(1800, 3 * 26719, 64) * 4.0 < exact_flops(1800, 3 * 26719));
+}
