@@ -52,6 +52,8 @@ def write_animation(
     max_targets: int = 200,
     clip_tolerance: Optional[float] = None,
     per_frame_targets: bool = False,
+    quantize: bool = False,
+    meshopt: bool = False,
 ) -> None: ...
 def read_rig(
     path: PathLike, mesh: Optional[str] = None, animation: Optional[str] = None

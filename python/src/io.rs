@@ -139,11 +139,15 @@ pub fn read_animation<'py>(
 /// compact clip (a few morph targets at per-frame weights, every vertex of every frame within
 /// `clip_tolerance` of the bounding-box diagonal, default 1e-3), as the CLI writes it;
 /// `clip_tolerance` asks for one at any length, `per_frame_targets=True` keeps one target per
-/// frame (split into meshes of at most `max_targets`).
+/// frame (split into meshes of at most `max_targets`). `quantize=True` stores a `.glb`/`.gltf`
+/// animation as 16-bit positions and deltas (`KHR_mesh_quantization`, within 2.7e-5 of the
+/// diagonal), `meshopt=True` compresses it losslessly (`EXT_meshopt_compression`), as the
+/// CLI's `--quantize` and `--meshopt`; with a template both are refused (the asset keeps its
+/// own encoding).
 ///
 /// >>> morphkit.write_animation("physical.glb", frames, template="face.glb", clip="talk-physical")
 #[pyfunction]
-#[pyo3(signature = (path, frames, f=None, fps=24.0, template=None, clip=None, times=None, mesh=None, max_targets=mio::SAFE_MORPH_TARGETS, clip_tolerance=None, per_frame_targets=false))]
+#[pyo3(signature = (path, frames, f=None, fps=24.0, template=None, clip=None, times=None, mesh=None, max_targets=mio::SAFE_MORPH_TARGETS, clip_tolerance=None, per_frame_targets=false, quantize=false, meshopt=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn write_animation(
     py: Python<'_>,
@@ -158,6 +162,8 @@ pub fn write_animation(
     max_targets: usize,
     clip_tolerance: Option<f64>,
     per_frame_targets: bool,
+    quantize: bool,
+    meshopt: bool,
 ) -> PyResult<()> {
     let layout = match (per_frame_targets, clip_tolerance) {
         (true, Some(_)) => {
@@ -175,6 +181,12 @@ pub fn write_animation(
         (false, None) => mio::FrameLayout::Auto,
     };
     let frames = arrays::frames("frames", frames, None)?;
+    if template.is_some() && (quantize || meshopt) {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "quantize and meshopt apply to an animation written whole; a template asset keeps \
+             its own encoding (leave them out)",
+        ));
+    }
     if let Some(t) = template {
         return crate::rig_io::write_animation_into(
             py,
@@ -213,6 +225,8 @@ pub fn write_animation(
     };
     opts.gltf.max_targets = max_targets;
     opts.gltf.layout = layout;
+    opts.gltf.quantize = quantize;
+    opts.gltf.meshopt = meshopt;
     py.detach(|| mio::write_frames(&path, &set, &opts))
         .py(Kind::File)
 }

@@ -71,6 +71,28 @@ def test_a_long_animation_is_a_compact_clip(tmp_path):
     assert not (tmp_path / "x.glb").exists()
 
 
+def test_quantize_and_meshopt_make_smaller_files_that_read_back(tmp_path):
+    V, F = tube(16, 12)
+    t = np.linspace(0.0, 1.0, 12)[:, None, None]
+    frames = V[None] + np.sin(np.pi * t) * V * [0.2, 0, 0.1]
+    paths = {}
+    for q in (False, True):
+        for m in (False, True):
+            paths[q, m] = tmp_path / f"a-{int(q)}{int(m)}.glb"
+            morphkit.write_animation(paths[q, m], frames, F, quantize=q, meshopt=m)
+    for q in (False, True):
+        plain, _, _ = morphkit.read_animation(paths[q, False])
+        packed, _, _ = morphkit.read_animation(paths[q, True])
+        np.testing.assert_array_equal(plain, packed)  # meshopt is lossless
+        assert np.abs(packed - frames).max() <= (1e-4 if q else 1e-6) * diag(V)
+        assert b"EXT_meshopt_compression" in paths[q, True].read_bytes()[:4096]
+    assert paths[True, True].stat().st_size < paths[True, False].stat().st_size * 3 // 4
+    assert paths[True, False].stat().st_size < paths[False, False].stat().st_size
+    with pytest.raises(ValueError, match="keeps its own encoding"):
+        morphkit.write_animation(tmp_path / "x.glb", frames, template=paths[False, False], meshopt=True)
+    assert not (tmp_path / "x.glb").exists()
+
+
 def test_missing_file_is_an_os_error(tmp_path):
     with pytest.raises(morphkit.FileError) as e:
         morphkit.read(tmp_path / "nope.obj")
