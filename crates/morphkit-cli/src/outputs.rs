@@ -157,6 +157,7 @@ impl Outputs {
                 io::write_gltf_with(tmp, &rig, &opts).map(|_| ())
             })?);
         }
+        crate::outputs_flags::note_gltf_only_flags(path);
         Ok(self
             .staging
             .write(path, false, |tmp| io::write_mesh(tmp, mesh))?)
@@ -401,6 +402,7 @@ impl Outputs {
                 }
             };
         }
+        crate::outputs_flags::note_gltf_only_flags(path);
         Ok(self.staging.write(path, dir, |tmp| {
             io::write_frames_with(tmp, frames, &opts, on_frame)
         })?)

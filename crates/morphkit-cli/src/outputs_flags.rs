@@ -202,3 +202,33 @@ pub(crate) fn refuse_asset_flags(out: &Path, quantize_applies: bool) -> anyhow::
     }
     Ok(())
 }
+
+/// Notes on stderr that `--quantize`, `--meshopt` and `--sparse-targets`, when given, do
+/// nothing to `path`, an output in another format than glTF (OBJ, PLY, OFF, PC2, USD), which
+/// is written as it would be without them.
+pub(crate) fn note_gltf_only_flags(path: &Path) {
+    if matches!(
+        io::Format::from_path(path),
+        Some(io::Format::Glb | io::Format::Gltf)
+    ) {
+        return;
+    }
+    let f = context().flags;
+    let given: Vec<&str> = [
+        (f.quantize, "--quantize"),
+        (f.meshopt, "--meshopt"),
+        (f.sparse_targets, "--sparse-targets"),
+    ]
+    .iter()
+    .filter(|(on, _)| *on)
+    .map(|(_, name)| *name)
+    .collect();
+    if !given.is_empty() {
+        eprintln!(
+            "note: {}: {} shape .glb/.gltf output only; this output is written without {}",
+            path.display(),
+            given.join(", "),
+            if given.len() == 1 { "it" } else { "them" }
+        );
+    }
+}

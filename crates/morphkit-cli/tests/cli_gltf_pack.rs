@@ -186,6 +186,23 @@ fn meshopt_compresses_animations_and_compact_clips_and_is_refused_where_an_asset
             );
         }
     }
+    // Another format than glTF is written as without the flags, and the run says so.
+    let (_, err) = run_ok(&[
+        "--meshopt",
+        "--quantize",
+        "convert",
+        s(&frames),
+        s(&d.join("c.pc2")),
+    ]);
+    assert!(
+        err.contains("--quantize, --meshopt shape .glb/.gltf output only"),
+        "{err}"
+    );
+    let (_, err) = run_ok(&["--meshopt", "convert", s(&base), s(&d.join("one.ply"))]);
+    assert!(
+        err.contains("--meshopt shape .glb/.gltf output only"),
+        "{err}"
+    );
     // A user's asset: one target per frame keeps the asset's own encoding (refused), a compact
     // clip compresses its new data (and says so in --report).
     let rig = d.join("rig.glb");
