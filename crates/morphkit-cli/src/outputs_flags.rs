@@ -181,16 +181,12 @@ pub fn meshopt_flag() -> bool {
 
 pub(crate) fn refuse_asset_flags(out: &Path, quantize_applies: bool) -> anyhow::Result<()> {
     let f = context().flags;
-    let given: Vec<&str> = [
+    let given = given(&[
         (f.quantize && !quantize_applies, "--quantize"),
         (f.meshopt && !quantize_applies, "--meshopt"),
         (f.sparse_targets, "--sparse-targets"),
         (f.no_normals, "--no-normals"),
-    ]
-    .iter()
-    .filter(|(on, _)| *on)
-    .map(|(_, name)| *name)
-    .collect();
+    ]);
     if !given.is_empty() {
         anyhow::bail!(
             "{}: {} not applied to an edit of the user's asset, which keeps its own accessors and \
@@ -214,15 +210,11 @@ pub(crate) fn note_gltf_only_flags(path: &Path) {
         return;
     }
     let f = context().flags;
-    let given: Vec<&str> = [
+    let given = given(&[
         (f.quantize, "--quantize"),
         (f.meshopt, "--meshopt"),
         (f.sparse_targets, "--sparse-targets"),
-    ]
-    .iter()
-    .filter(|(on, _)| *on)
-    .map(|(_, name)| *name)
-    .collect();
+    ]);
     if !given.is_empty() {
         eprintln!(
             "note: {}: {} shape .glb/.gltf output only; this output is written without {}",
@@ -231,4 +223,13 @@ pub(crate) fn note_gltf_only_flags(path: &Path) {
             if given.len() == 1 { "it" } else { "them" }
         );
     }
+}
+
+/// The names of the flags given, of `(given, name)` pairs.
+fn given(flags: &[(bool, &'static str)]) -> Vec<&'static str> {
+    flags
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, name)| *name)
+        .collect()
 }
